@@ -1,0 +1,50 @@
+# Two commands for a fresh Debian machine: `make demo` and `make test`.
+# Every step is idempotent: re-running skips what is already in place.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.synmitsuba-installed
+export ANNY_CACHE_DIR ?= $(CURDIR)/.cache/anny
+export WARP_CACHE_PATH ?= $(CURDIR)/.cache/warp
+export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
+
+.PHONY: setup llvm demo test test-all bench clean
+
+setup: $(STAMP) llvm
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+
+# torch first and pinned: an unpinned torch pulls a multi-GB CUDA build.
+$(STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q torch==2.13.0
+	$(PY) -m pip install -q -e '.[dev]'
+	touch $@
+
+# drjit's LLVM backend needs libLLVM >= 16; probe it in a subprocess and install
+# Debian's libllvm19 when the present one cannot JIT.
+llvm: $(STAMP)
+	@if $(PY) -m synmitsuba.render.llvm --probe; then :; else \
+	  echo "synmitsuba: installing libllvm19 (drjit needs libLLVM >= 16)"; \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq libllvm19 >/dev/null && \
+	  $(PY) -m synmitsuba.render.llvm --probe; \
+	fi
+
+demo: setup
+	$(VENV)/bin/synmitsuba render scenes/demo.yaml --out out/demo
+	@echo "demo pictures: $(CURDIR)/out/demo/*.png"
+
+test: setup
+	$(PY) -m pytest -q
+
+test-all: setup
+	$(PY) -m pytest -q -m ''
+
+bench: setup
+	$(PY) bench/render_passes.py
+
+clean:
+	rm -rf out .pytest_cache

@@ -1,0 +1,2 @@
+"""Layered parametric humans: body models, garments, hair, accessories, textures."""
+__all__: list[str] = []
