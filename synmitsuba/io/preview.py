@@ -1,0 +1,36 @@
+"""sRGB previews of linear renders (colour-science's sRGB encoding) and PNG writing."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+
+def to_srgb8(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+    """Linear RGB (..., 3) -> uint8 sRGB with the IEC 61966-2-1 curve, clipped to [0, 1]."""
+    import colour
+    lin = np.clip(np.nan_to_num(np.asarray(rgb, dtype=np.float64) * 2.0 ** exposure), 0.0, 1.0)
+    return np.round(colour.cctf_encoding(lin, function="sRGB") * 255.0).astype(np.uint8)
+
+
+def write_png(path: str, image: np.ndarray) -> str:
+    """Write a uint8 (H, W), (H, W, 3) or (H, W, 4) image atomically (temporary name, then rename)."""
+    from PIL import Image
+    path = os.fspath(path)
+    tmp = f"{path}.tmp-{os.getpid()}.png"
+    Image.fromarray(np.ascontiguousarray(image)).save(tmp)
+    os.replace(tmp, path)
+    return path
+
+
+def contact_sheet(images: list[np.ndarray], columns: int, pad: int = 2) -> np.ndarray:
+    """Tile equally sized uint8 images into one (white padding)."""
+    h, w = images[0].shape[:2]
+    c = images[0].shape[2] if images[0].ndim == 3 else 1
+    rows = (len(images) + columns - 1) // columns
+    sheet = np.full((rows * (h + pad) + pad, columns * (w + pad) + pad, c), 255, np.uint8)
+    for i, img in enumerate(images):
+        r, k = divmod(i, columns)
+        y, x = pad + r * (h + pad), pad + k * (w + pad)
+        sheet[y:y + h, x:x + w] = img.reshape(h, w, c)
+    return sheet[..., 0] if c == 1 else sheet

@@ -1,0 +1,158 @@
+"""Turn a ``synmitsuba.Scene`` into a Mitsuba scene, cached on the scene and updated in place."""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
+                                        PointLight, SunSky)
+from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
+
+
+def _bitmap(arr: np.ndarray) -> dict:
+    import mitsuba as mi
+    data = arr[..., None] if arr.ndim == 2 else arr
+    return {"type": "bitmap", "data": mi.TensorXf(np.ascontiguousarray(data, dtype=np.float32)),
+            "raw": True, "filter_type": "bilinear", "wrap_mode": "repeat"}
+
+
+def bsdf_dict(mat: Material) -> dict:
+    """Mitsuba BSDF dict for a Material."""
+    color = _bitmap(mat.texture) if mat.texture is not None else {"type": "rgb", "value": list(mat.base_color)}
+    if mat.kind == "hair":
+        return {"type": "hair", "eumelanin": 8.0 * mat.melanin, "pheomelanin": 0.2,
+                "longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3}
+    if mat.kind == "principled":
+        bsdf = {"type": "principled", "base_color": color, "roughness": mat.roughness,
+                "metallic": mat.metallic, "specular": mat.specular}
+    else:
+        bsdf = {"type": "diffuse", "reflectance": color}
+    if mat.two_sided:
+        bsdf = {"type": "twosided", "bsdf": bsdf}
+    if mat.normal_map is not None:
+        bsdf = {"type": "normalmap", "normalmap": _bitmap(mat.normal_map), "bsdf": bsdf}
+    elif mat.bump is not None:
+        bsdf = {"type": "bumpmap", "height": _bitmap(mat.bump), "scale": float(mat.bump_scale), "bsdf": bsdf}
+    return bsdf
+
+
+def _mesh(shape: MeshShape):
+    import mitsuba as mi
+    m = mi.Mesh(shape.name, len(shape.vertices), len(shape.faces),
+                has_vertex_normals=shape.normals is not None, has_vertex_texcoords=shape.uv is not None)
+    p = mi.traverse(m)
+    p["vertex_positions"] = mi.Float(shape.vertices.astype(np.float32).ravel())
+    p["faces"] = mi.UInt32(shape.faces.ravel())
+    if shape.normals is not None:
+        n = shape.normals / np.maximum(np.linalg.norm(shape.normals, axis=1, keepdims=True), 1e-12)
+        p["vertex_normals"] = mi.Float(n.astype(np.float32).ravel())
+    if shape.uv is not None:  # our uv has v up (OBJ); Mitsuba's bitmap row 0 is at v = 0
+        uv = np.stack([shape.uv[:, 0], 1.0 - shape.uv[:, 1]], 1)
+        p["vertex_texcoords"] = mi.Float(uv.astype(np.float32).ravel())
+    p.update()
+    m.set_bsdf(mi.load_dict(bsdf_dict(shape.material)))
+    return m
+
+
+def _curves(shape: CurveShape):
+    """bsplinecurve reads a text file (one 'x y z r' line per control point, blank line between
+    strands); it is written to a temporary file, loaded, and deleted."""
+    import mitsuba as mi
+    rows = np.concatenate([shape.points, shape.radius[..., None]], -1).astype(np.float32)
+    with tempfile.TemporaryDirectory(prefix="synmitsuba-curves-") as tmp:
+        path = os.path.join(tmp, f"{shape.name}.txt")
+        with open(path, "w") as fh:
+            for strand in rows:
+                np.savetxt(fh, strand, fmt="%.7g")
+                fh.write("\n")
+        return mi.load_dict({"type": "bsplinecurve", "filename": path, "id": shape.name,
+                             "bsdf": bsdf_dict(shape.material)})
+
+
+def _environment(env) -> dict | None:
+    import mitsuba as mi
+    if env is None:
+        return None
+    if isinstance(env, Constant):
+        return {"type": "constant", "radiance": {"type": "rgb", "value": list(env.radiance)}}
+    if isinstance(env, SunSky):
+        # Mitsuba's sky model is z-up in its local frame; sun_direction is taken in world space.
+        return {"type": "sunsky", "sun_direction": list(env.sun_direction), "turbidity": env.turbidity,
+                "albedo": env.albedo, "sun_scale": env.sun_scale, "sky_scale": env.sky_scale,
+                "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90)}
+    if isinstance(env, EnvMap):
+        to_world = mi.ScalarTransform4f().rotate([0, 1, 0], env.rotation_deg)
+        return {"type": "envmap", "bitmap": mi.Bitmap(env.pixels()), "scale": env.scale, "to_world": to_world}
+    raise TypeError(env)
+
+
+def _light(light) -> dict:
+    import mitsuba as mi
+    if isinstance(light, PointLight):
+        return {"type": "point", "position": list(light.position),
+                "intensity": {"type": "rgb", "value": list(light.intensity)}}
+    if isinstance(light, DirectionalLight):
+        return {"type": "directional", "direction": list(light.direction),
+                "irradiance": {"type": "rgb", "value": list(light.irradiance)}}
+    if isinstance(light, AreaLight):
+        to_world = mi.ScalarTransform4f().look_at(origin=list(light.position), target=list(light.target),
+                                                  up=[0, 1, 0] if abs(np.subtract(light.target, light.position)[1])
+                                                  < 0.999 * np.linalg.norm(np.subtract(light.target, light.position))
+                                                  else [0, 0, 1]) @ mi.ScalarTransform4f().scale(
+            [light.size[0] / 2, light.size[1] / 2, 1])
+        return {"type": "rectangle", "to_world": to_world,
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": list(light.radiance)}},
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}}}
+    raise TypeError(light)
+
+
+@dataclass
+class BuiltScene:
+    """A loaded Mitsuba scene plus what maps its shapes back to our ids."""
+
+    mi_scene: object
+    params: object
+    versions: tuple[int, int]
+    registry_ids: np.ndarray   # sorted drjit registry ids of the scene's shapes
+    instance_of: np.ndarray    # instance id per entry of registry_ids
+    layer_of: np.ndarray       # layer id per entry of registry_ids
+
+
+def build(scene: Scene) -> BuiltScene:
+    """Load ``scene`` into Mitsuba, or reuse/update the cached load."""
+    import drjit as dr
+    import mitsuba as mi
+    cached: BuiltScene | None = getattr(scene, "_built", None)
+    if cached is not None and cached.versions[0] == scene.structure_version:
+        if cached.versions[1] != scene.geometry_version:
+            for name, m in scene.meshes.items():
+                cached.params[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
+            cached.params.update()
+            cached.versions = (scene.structure_version, scene.geometry_version)
+        return cached
+    d: dict = {"type": "scene"}
+    for name, m in scene.meshes.items():
+        d[name] = _mesh(m)
+    for name, c in scene.curves.items():
+        d[name] = _curves(c)
+    env = _environment(scene.environment)
+    if env is not None:
+        d["environment"] = env
+    for i, light in enumerate(scene.lights):
+        d[f"light_{i}"] = _light(light)
+    mi_scene = mi.load_dict(d)
+    ids = {**{n: (m.instance, m.layer) for n, m in scene.meshes.items()},
+           **{n: (c.instance, c.layer) for n, c in scene.curves.items()}}
+    reg = dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr()).numpy() if mi_scene.shapes() else np.zeros(0, np.uint32)
+    inst = np.zeros(len(reg), np.int32)
+    lay = np.zeros(len(reg), np.uint8)
+    for k, shape in enumerate(mi_scene.shapes()):
+        inst[k], lay[k] = ids.get(shape.id(), (0, 0))  # emitters' rectangles get (0, 0)
+    order = np.argsort(reg)
+    built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version),
+                       reg[order], inst[order], lay[order])
+    scene._built = built
+    return built

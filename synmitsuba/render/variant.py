@@ -1,0 +1,71 @@
+"""Choose the Mitsuba variant once per process, safely.
+
+``set_variant()`` picks ``llvm_ad_rgb`` (CPU, differentiable) unless told otherwise (argument or
+``SYNMITSUBA_VARIANT``). For LLVM variants it first makes sure a usable libLLVM is chosen: a
+broken one would abort the whole process inside drjit, so we find and, if unsure, probe it.
+"""
+from __future__ import annotations
+
+import os
+
+from synmitsuba.errors import ConfigError, LLVMError
+from synmitsuba.render import llvm
+
+DEFAULT_VARIANT = "llvm_ad_rgb"
+_state: dict = {"variant": None, "threads": None}
+
+
+def _threads() -> int:
+    env = os.environ.get("SYNMITSUBA_THREADS")
+    if env:
+        return max(1, int(env))
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # macOS
+        return max(1, os.cpu_count() or 1)
+
+
+def set_variant(name: str | None = None, threads: int | None = None) -> str:
+    """Select the Mitsuba variant (default ``llvm_ad_rgb``) and drjit's thread count.
+
+    Call before building scenes; calling again with the same name is free. ``threads`` (default:
+    the CPUs this process may use, or ``SYNMITSUBA_THREADS``) only applies before the first
+    scene is loaded, as Embree fixes its builder threads then.
+    """
+    name = name or os.environ.get("SYNMITSUBA_VARIANT") or DEFAULT_VARIANT
+    if _state["variant"] == name:
+        return name
+    if name.startswith("llvm"):
+        _ensure_llvm()
+    import drjit as dr
+    import mitsuba as mi
+    if name not in mi.variants():
+        raise ConfigError("variant", name, f"use one of: {', '.join(mi.variants())}")
+    if _state["variant"] is None:
+        n = threads or _threads()
+        dr.set_thread_count(n)
+        _state["threads"] = n
+    mi.set_variant(name)
+    _state["variant"] = name
+    return name
+
+
+def _ensure_llvm() -> None:
+    if _state.get("llvm_ok"):
+        return
+    path = llvm.choose_libllvm()  # raises LLVMError when only old ones are present
+    named = path and llvm.version_from_name(os.path.realpath(path)) or (path and llvm.version_from_name(path))
+    if not (named and named[0] >= llvm.MIN_VERSION):
+        ok, msg = llvm.probe()
+        if not ok:
+            raise LLVMError(msg)
+    _state["llvm_ok"] = True
+
+
+def current_variant() -> str:
+    """The variant in use, selecting the default one if none was chosen yet."""
+    return _state["variant"] or set_variant()
+
+
+def thread_count() -> int | None:
+    return _state["threads"]

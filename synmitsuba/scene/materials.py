@@ -1,0 +1,166 @@
+"""Materials, environments and lights: plain data that the renderer turns into Mitsuba dicts.
+
+Colours are linear RGB in [0, 1]. Textures are float32 arrays (H, W, 3) of linear albedo (a
+uint8 array is taken as sRGB-encoded and decoded once, so it stays differentiable downstream).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError
+
+MATERIAL_KINDS = ("diffuse", "principled", "hair")
+
+
+def _rgb(name: str, value) -> tuple[float, float, float]:
+    arr = np.asarray(value, dtype=np.float64).reshape(-1)
+    if arr.size == 1:
+        arr = np.repeat(arr, 3)
+    if arr.size != 3 or not np.isfinite(arr).all() or (arr < 0).any():
+        raise ConfigError(name, value, "give 3 finite, non-negative linear RGB values (or one grey value)")
+    return tuple(float(x) for x in arr)
+
+
+def _image(name: str, value, channels: int | None) -> np.ndarray:
+    arr = np.asarray(value)
+    if arr.dtype == np.uint8:
+        import colour
+        arr = colour.cctf_decoding(arr.astype(np.float32) / 255.0, function="sRGB")
+    arr = np.ascontiguousarray(arr, dtype=np.float32)
+    want = "H x W" if channels is None else f"H x W x {channels}"
+    ok = arr.ndim == 2 if channels is None else (arr.ndim == 3 and arr.shape[2] == channels)
+    if not ok or min(arr.shape[:2]) < 1:
+        raise ConfigError(name, f"array{arr.shape}", f"give an {want} array")
+    if not np.isfinite(arr).all():
+        raise ConfigError(name, f"array{arr.shape}", "texture values must be finite")
+    return arr
+
+
+@dataclass
+class Material:
+    """A surface material.
+
+    kind: ``diffuse`` (Lambertian), ``principled`` (Disney-style; roughness, metallic,
+    specular) or ``hair`` (Mitsuba's hair BSDF for curves, coloured by ``melanin``).
+    ``texture`` replaces ``base_color``; ``bump`` (H, W height map, scaled by ``bump_scale``)
+    or ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded) perturb shading normals.
+    """
+
+    base_color: tuple = (0.5, 0.5, 0.5)
+    texture: np.ndarray | None = None
+    kind: str = "diffuse"
+    roughness: float = 0.5
+    metallic: float = 0.0
+    specular: float = 0.5
+    bump: np.ndarray | None = None
+    bump_scale: float = 1.0
+    normal_map: np.ndarray | None = None
+    two_sided: bool = True
+    melanin: float = 0.3
+    name: str = ""
+
+    def __post_init__(self):
+        self.base_color = _rgb("material.base_color", self.base_color)
+        if self.kind not in MATERIAL_KINDS:
+            raise ConfigError("material.kind", self.kind, f"use one of {', '.join(MATERIAL_KINDS)}")
+        for f in ("roughness", "metallic", "specular", "melanin"):
+            v = getattr(self, f)
+            if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0):
+                raise ConfigError(f"material.{f}", v, "give a number in [0, 1]")
+        if self.texture is not None:
+            self.texture = _image("material.texture", self.texture, 3)
+        if self.bump is not None:
+            self.bump = _image("material.bump", self.bump, None)
+        if self.normal_map is not None:
+            self.normal_map = _image("material.normal_map", self.normal_map, 3)
+
+
+# -- environments ----------------------------------------------------------------------
+@dataclass
+class Constant:
+    """Uniform environment light of the given radiance (grey value or RGB)."""
+
+    radiance: float | tuple = 1.0
+
+    def __post_init__(self):
+        self.radiance = _rgb("environment.radiance", self.radiance)
+
+
+@dataclass
+class SunSky:
+    """Mitsuba's physical sun and sky (Hosek-Wilkie); ``sun_direction`` points towards the sun,
+    world y up."""
+
+    sun_direction: tuple = (0.3, 1.0, 0.2)
+    turbidity: float = 3.0
+    albedo: float = 0.3
+    sun_scale: float = 1.0
+    sky_scale: float = 1.0
+
+    def __post_init__(self):
+        d = np.asarray(self.sun_direction, dtype=np.float64)
+        if d.shape != (3,) or not np.isfinite(d).all() or np.linalg.norm(d) == 0:
+            raise ConfigError("environment.sun_direction", self.sun_direction, "give a non-zero 3-vector")
+        if d[1] <= 0:
+            raise ConfigError("environment.sun_direction", self.sun_direction,
+                              "the sun must be above the horizon: y component > 0")
+        self.sun_direction = tuple(float(x) for x in d / np.linalg.norm(d))
+        if not 1 <= self.turbidity <= 10:
+            raise ConfigError("environment.turbidity", self.turbidity, "give a value in [1, 10]")
+
+
+@dataclass
+class EnvMap:
+    """An equirectangular HDR environment (EXR/HDR file or (H, W, 3) array), y up; negative
+    pixels of lossy files are clamped to 0. ``rotation_deg`` turns it about the y axis."""
+
+    source: object = None
+    scale: float = 1.0
+    rotation_deg: float = 0.0
+
+    def pixels(self) -> np.ndarray:
+        if isinstance(self.source, np.ndarray):
+            arr = _image("environment.source", self.source, 3)
+        else:
+            import os
+            if not isinstance(self.source, (str, os.PathLike)) or not os.path.isfile(self.source):
+                raise ConfigError("environment.file", self.source, "give the path of an existing .exr or .hdr file")
+            import mitsuba as mi
+            bmp = mi.Bitmap(str(self.source)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False)
+            arr = np.array(bmp, dtype=np.float32)
+        return np.clip(np.nan_to_num(arr, nan=0.0, posinf=0.0), 0.0, None)
+
+
+# -- lights ----------------------------------------------------------------------------
+@dataclass
+class PointLight:
+    position: tuple = (0.0, 3.0, 0.0)
+    intensity: float | tuple = 10.0  # W/sr per channel
+
+    def __post_init__(self):
+        self.intensity = _rgb("light.intensity", self.intensity)
+
+
+@dataclass
+class DirectionalLight:
+    direction: tuple = (0.0, -1.0, 0.0)  # direction the light travels
+    irradiance: float | tuple = 3.0
+
+    def __post_init__(self):
+        self.irradiance = _rgb("light.irradiance", self.irradiance)
+
+
+@dataclass
+class AreaLight:
+    """A one-sided rectangle emitter of ``size`` (w, h) metres at ``position`` facing ``target``."""
+
+    position: tuple = (0.0, 3.0, 0.0)
+    target: tuple = (0.0, 0.0, 0.0)
+    size: tuple = (1.0, 1.0)
+    radiance: float | tuple = 5.0
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.radiance = _rgb("light.radiance", self.radiance)
