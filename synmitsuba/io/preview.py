@@ -5,10 +5,12 @@ import os
 
 import numpy as np
 
+from synmitsuba._colour import import_colour
+
 
 def to_srgb8(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     """Linear RGB (..., 3) -> uint8 sRGB with the IEC 61966-2-1 curve, clipped to [0, 1]."""
-    import colour
+    colour = import_colour()
     lin = np.clip(np.nan_to_num(np.asarray(rgb, dtype=np.float64) * 2.0 ** exposure), 0.0, 1.0)
     return np.round(colour.cctf_encoding(lin, function="sRGB") * 255.0).astype(np.uint8)
 

@@ -26,8 +26,8 @@ def _rgb(name: str, value) -> tuple[float, float, float]:
 def _image(name: str, value, channels: int | None) -> np.ndarray:
     arr = np.asarray(value)
     if arr.dtype == np.uint8:
-        import colour
-        arr = colour.cctf_decoding(arr.astype(np.float32) / 255.0, function="sRGB")
+        from synmitsuba._colour import import_colour
+        arr = import_colour().cctf_decoding(arr.astype(np.float32) / 255.0, function="sRGB")
     arr = np.ascontiguousarray(arr, dtype=np.float32)
     want = "H x W" if channels is None else f"H x W x {channels}"
     ok = arr.ndim == 2 if channels is None else (arr.ndim == 3 and arr.shape[2] == channels)
