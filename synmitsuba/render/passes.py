@@ -66,11 +66,27 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     return Sample(rgb=rgb, camera=camera, meta=meta, **passes)
 
 
-def _rays(camera: Camera, directions: np.ndarray):
+def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None):
+    """World rays built inside drjit: ``per_pixel`` rays per pixel, through the pixel centre
+    (``seed`` None) or at stratified jittered positions (a side x side grid, seeded PCG32).
+    Returns (ray, unit directions)."""
+    import drjit as dr
     import mitsuba as mi
-    d = directions.reshape(-1, 3).astype(np.float32)
-    o = np.broadcast_to(camera.center.astype(np.float32), d.shape)
-    return mi.Ray3f(mi.Point3f(np.ascontiguousarray(o.T)), mi.Vector3f(np.ascontiguousarray(d.T)))
+    H, W = camera.height, camera.width
+    idx = dr.arange(mi.UInt32, H * W * per_pixel)
+    pixel, k = idx // per_pixel, idx % per_pixel
+    x, y = mi.Float(pixel % W), mi.Float(pixel // W)
+    if seed is None:
+        ox = oy = mi.Float(0.5)
+    else:
+        side = math.ceil(math.sqrt(per_pixel))
+        rng = mi.PCG32(size=H * W * per_pixel, initstate=mi.UInt64(idx), initseq=mi.UInt64(seed))
+        ox = (mi.Float(k % side) + rng.next_float32()) / side
+        oy = (mi.Float(k // side) + rng.next_float32()) / side
+    M = mi.Matrix3f((camera.R.T @ np.linalg.inv(camera.K)).tolist())
+    d = dr.normalize(M @ mi.Vector3f(x + ox, y + oy, 1.0))
+    o = mi.Point3f(*[float(c) for c in camera.center])
+    return mi.Ray3f(o, d), d
 
 
 def exact_passes(built, camera: Camera) -> dict:
@@ -78,27 +94,25 @@ def exact_passes(built, camera: Camera) -> dict:
     import drjit as dr
     import mitsuba as mi
     H, W = camera.height, camera.width
-    dirs = camera.pixel_rays()
-    si = built.mi_scene.ray_intersect(_rays(camera, dirs))
-    hit = np.array(si.is_valid(), dtype=bool)
-    t = np.array(si.t, dtype=np.float64)
-    p = np.array(si.p, dtype=np.float64).T
-    n = np.array(si.sh_frame.n, dtype=np.float64).T
-    uv = np.array(si.uv, dtype=np.float64).T
-    reg = np.array(dr.reinterpret_array(mi.UInt32, si.shape), dtype=np.uint32)
-    d = dirs.reshape(-1, 3)
-    depth = np.where(hit, t * (d @ camera.R[2]), 0.0)
-    n = np.where((np.einsum("ij,ij->i", n, d) > 0)[:, None], -n, n)  # face the camera
-    n_cam = n @ camera.R.T
-    n_cam /= np.maximum(np.linalg.norm(n_cam, axis=1, keepdims=True), 1e-12)
-    instance, layer = _lookup_ids(built, reg, hit)
-    uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], 1)  # back to v up
-    zero = ~hit[:, None]
-    return {"depth": depth.reshape(H, W).astype(np.float32),
-            "mask": hit.reshape(H, W),
-            "normal": np.where(zero, 0.0, n_cam).reshape(H, W, 3).astype(np.float32),
-            "position": np.where(zero, 0.0, p).reshape(H, W, 3).astype(np.float32),
-            "uv": np.where(zero, 0.0, uv).reshape(H, W, 2).astype(np.float32),
+    ray, d = _camera_rays(camera)
+    si = built.mi_scene.ray_intersect(ray)
+    hit = si.is_valid()
+    axis = mi.Vector3f(*camera.R[2].tolist())
+    depth = dr.select(hit, si.t * dr.dot(d, axis), 0.0)
+    n = dr.select(dr.dot(si.sh_frame.n, d) > 0, -si.sh_frame.n, si.sh_frame.n)  # face the camera
+    Rm = mi.Matrix3f(camera.R.tolist())
+    n_cam = dr.select(hit, dr.normalize(Rm @ n), 0.0)
+    p = dr.select(hit, si.p, 0.0)
+    uv = dr.select(hit, mi.Point2f(si.uv.x, 1.0 - si.uv.y), 0.0)  # back to v up
+    reg = dr.reinterpret_array(mi.UInt32, si.shape)
+    dr.eval(hit, depth, n_cam, p, uv, reg)
+    hit_np = np.array(hit, dtype=bool)
+    instance, layer = _lookup_ids(built, np.array(reg, dtype=np.uint32), hit_np)
+    return {"depth": np.array(depth, dtype=np.float32).reshape(H, W),
+            "mask": hit_np.reshape(H, W),
+            "normal": np.array(n_cam, dtype=np.float32).T.reshape(H, W, 3),
+            "position": np.array(p, dtype=np.float32).T.reshape(H, W, 3),
+            "uv": np.array(uv, dtype=np.float32).T.reshape(H, W, 2),
             "instance": instance.reshape(H, W), "layer": layer.reshape(H, W)}
 
 
@@ -115,13 +129,9 @@ def _lookup_ids(built, reg: np.ndarray, hit: np.ndarray) -> tuple[np.ndarray, np
 
 def coverage(built, camera: Camera, samples: int, seed: int) -> np.ndarray:
     """Fraction of each pixel covered by geometry, from stratified jittered sub-pixel rays."""
-    H, W = camera.height, camera.width
-    rng = np.random.default_rng([seed, 0x5A1F])
-    side = int(math.ceil(math.sqrt(samples)))
-    cells = np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2)[:samples]
-    hits = np.zeros(H * W, np.float32)
-    for cell in cells:
-        offsets = (cell + rng.random((H, W, 2))) / side
-        pi = built.mi_scene.ray_intersect_preliminary(_rays(camera, camera.pixel_rays(offsets)))
-        hits += np.array(pi.is_valid(), dtype=np.float32)
-    return (hits / len(cells)).reshape(H, W)
+    ray, _ = _camera_rays(camera, samples, seed=seed)
+    import drjit as dr
+    import mitsuba as mi
+    pi = built.mi_scene.ray_intersect_preliminary(ray)
+    count = dr.block_sum(dr.select(pi.is_valid(), mi.Float(1.0), 0.0), samples)  # exact integers
+    return (np.array(count, dtype=np.float32) / samples).reshape(camera.height, camera.width)
