@@ -25,6 +25,8 @@ def test_exr_round_trip_is_bit_exact(sm, tmp_path):
         a, b = getattr(s, name), getattr(r, name)
         assert a.dtype == b.dtype and a.shape == b.shape, name
         assert np.array_equal(a, b), name
+    assert sorted(r.coverage) == sorted(s.coverage) == [12]
+    assert np.array_equal(r.coverage[12], s.coverage[12])
     np.testing.assert_array_equal(r.camera.K, s.camera.K)
     np.testing.assert_array_equal(r.camera.R, s.camera.R)
     assert r.camera.width == 30 and r.camera.height == 20

@@ -187,3 +187,21 @@ def test_fixed_seed_is_deterministic_and_seed_changes_noise(sm):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert not np.array_equal(a.rgb, c.rgb)
     assert np.array_equal(a.depth, c.depth)
+
+
+def test_per_instance_coverage_is_a_soft_mask_consistent_with_ids(sm):
+    scene = sm.Scene()
+    for k, inst in enumerate((3, 8)):
+        box = trimesh.creation.box((0.6, 0.6, 0.1))
+        scene.add_mesh(f"b{k}", box.vertices + [-0.35 + 0.7 * k, 0, 0.1 * k], box.faces, instance=inst)
+    cam = sm.Camera.look_at(eye=(0, 0, 3), target=(0, 0, 0), width=40, height=30)
+    s = sm.render(scene, cam, spp=4, coverage_samples=16)
+    assert sorted(s.coverage) == [3, 8]
+    total = s.coverage[3] + s.coverage[8]
+    assert np.allclose(total, s.alpha)
+    for inst, frac in s.coverage.items():
+        assert (frac[s.instance == inst] > 0).all()
+        inner = (s.instance == inst) & (frac == 1.0)
+        assert inner.sum() > 0.6 * (s.instance == inst).sum()
+    # the boxes overlap in x: where box 8 (nearer) covers a pixel fully, box 3 covers none of it
+    assert (s.coverage[3][s.coverage[8] == 1.0] == 0).all()

@@ -1,7 +1,7 @@
 """One multi-channel OpenEXR per sample (+ JSON sidecar + sRGB PNG preview), and reading back.
 
 Channels: R G B A (float32), depth.Z, normal.X/Y/Z, position.X/Y/Z, uv.U/V (float32),
-mask, instance, layer (uint32). The camera (OpenCV K, R, t, size) and render settings are in
+mask, instance, layer (uint32), coverage.<id> (half: soft mask of each instance). The camera (OpenCV K, R, t, size) and render settings are in
 the EXR header (``synmitsuba`` attribute, JSON) and in ``<stem>.json``. Files are written under a
 temporary name and renamed, so a crash never leaves a half-written sample that looks complete.
 """
@@ -33,6 +33,8 @@ def _channels(sample: Sample) -> dict[str, np.ndarray]:
     ch["mask"] = sample.mask.astype(np.uint32)
     ch["instance"] = sample.instance.astype(np.uint32)
     ch["layer"] = sample.layer.astype(np.uint32)
+    for inst, frac in sample.coverage.items():  # k / samples: exact in half precision for samples <= 2048
+        ch[f"coverage.{inst}"] = np.ascontiguousarray(frac, dtype=np.float16)
     return ch
 
 
@@ -75,7 +77,9 @@ def read_sample(stem: str) -> Sample:
         ch = {k: v.pixels for k, v in f.channels().items()}
         side = json.loads(f.header()["synmitsuba"])
     vec = {name: np.stack([ch[f"{name}.{c}"] for c in comps], -1) for name, comps in _VEC.items()}
+    cov = {int(k.split(".", 1)[1]): v.astype(np.float32) for k, v in ch.items() if k.startswith("coverage.")}
     return Sample(rgb=np.stack([ch["R"], ch["G"], ch["B"]], -1), alpha=ch["A"], depth=ch["depth.Z"],
+                  coverage=dict(sorted(cov.items())),
                   mask=ch["mask"].astype(bool), instance=ch["instance"].astype(np.int32),
                   layer=ch["layer"].astype(np.uint8), camera=Camera.from_dict(side["camera"]),
                   meta=side.get("meta", {}), **vec)

@@ -58,7 +58,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
                              spp=spp, seed=seed), dtype=np.float32)[..., :3]
     t2 = time.perf_counter()
     passes = exact_passes(built, camera)
-    passes["alpha"] = coverage(built, camera, coverage_samples, seed)
+    passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed)
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
             "variant": variant, "rfilter": rfilter,
@@ -127,11 +127,24 @@ def _lookup_ids(built, reg: np.ndarray, hit: np.ndarray) -> tuple[np.ndarray, np
     return instance, layer
 
 
-def coverage(built, camera: Camera, samples: int, seed: int) -> np.ndarray:
-    """Fraction of each pixel covered by geometry, from stratified jittered sub-pixel rays."""
-    ray, _ = _camera_rays(camera, samples, seed=seed)
+def coverage(built, camera: Camera, samples: int, seed: int) -> tuple[np.ndarray, dict]:
+    """Soft coverage from stratified jittered sub-pixel rays: the fraction of each pixel covered
+    by any geometry (alpha), and per instance id > 0 ({id: (H, W) fraction})."""
     import drjit as dr
     import mitsuba as mi
+    H, W = camera.height, camera.width
+    ray, _ = _camera_rays(camera, samples, seed=seed)
     pi = built.mi_scene.ray_intersect_preliminary(ray)
-    count = dr.block_sum(dr.select(pi.is_valid(), mi.Float(1.0), 0.0), samples)  # exact integers
-    return (np.array(count, dtype=np.float32) / samples).reshape(camera.height, camera.width)
+    valid = pi.is_valid()
+    count = dr.block_sum(dr.select(valid, mi.Float(1.0), 0.0), samples)  # exact integers
+    alpha = (np.array(count, dtype=np.float32) / samples).reshape(H, W)
+    per_instance: dict[int, np.ndarray] = {}
+    if (built.instance_of > 0).any():
+        reg = np.array(dr.select(valid, dr.reinterpret_array(mi.UInt32, pi.shape), 0), dtype=np.uint32)
+        inst, _ = _lookup_ids(built, reg, reg != 0)
+        pixel = np.arange(H * W * samples, dtype=np.int64) // samples
+        for i in np.unique(inst):
+            if i > 0:
+                hits = np.bincount(pixel[inst == i], minlength=H * W)
+                per_instance[int(i)] = (hits.astype(np.float32) / samples).reshape(H, W)
+    return alpha, per_instance

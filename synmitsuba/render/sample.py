@@ -21,6 +21,8 @@ class Sample:
     uv       (H, W, 2) float32 texture coordinates (v up)
     instance (H, W)    int32   instance id, 0 = background
     layer    (H, W)    uint8   semantic layer id (synmitsuba.Layer), 0 = background
+    coverage {instance id: (H, W) float32} fraction of each pixel covered by that instance
+             (multi-sample soft masks, for ids > 0)
     """
 
     rgb: np.ndarray
@@ -33,6 +35,7 @@ class Sample:
     instance: np.ndarray
     layer: np.ndarray
     camera: Camera
+    coverage: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
 
     PASSES = ("rgb", "alpha", "depth", "mask", "normal", "position", "uv", "instance", "layer")
