@@ -45,7 +45,12 @@ def set_variant(name: str | None = None, threads: int | None = None) -> str:
         n = threads or _threads()
         dr.set_thread_count(n)
         _state["threads"] = n
-    mi.set_variant(name)
+    try:
+        mi.set_variant(name)
+    except ImportError as exc:
+        hint = ("it needs an NVIDIA GPU with a working driver; on a CPU use llvm_ad_rgb"
+                if name.startswith("cuda") else "see `synmitsuba info`")
+        raise ConfigError("variant", name, f"cannot start this variant ({exc}); {hint}") from None
     _state["variant"] = name
     return name
 
