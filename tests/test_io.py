@@ -63,3 +63,17 @@ def test_png_preview_uses_srgb_encoding(sm, tmp_path):
 def test_to_srgb8_known_values(sm):
     out = sm.to_srgb8(np.array([[0.0, 0.0031308, 0.18, 1.0, 2.0]]).reshape(1, 5, 1).repeat(3, -1))
     assert out[0, :, 0].tolist() == [0, 10, 118, 255, 255]
+
+
+def test_torch_dataset_lists_only_complete_samples(sm, tmp_path):
+    import torch
+    s = small_sample(sm)
+    sm.write_sample(s, tmp_path / "a" / "0000")
+    sm.write_sample(s, tmp_path / "a" / "0001")
+    (tmp_path / "a" / "0002.exr").write_bytes(b"half-written")  # no sidecar: not done
+    ds = sm.SampleDataset(tmp_path)
+    assert len(ds) == 2 and isinstance(ds, torch.utils.data.Dataset)
+    item = next(iter(torch.utils.data.DataLoader(ds, batch_size=2)))
+    assert item["rgb"].shape == (2, 3, 20, 30) and item["depth"].shape == (2, 20, 30)
+    assert item["instance"].dtype == torch.int32 and item["K"].shape == (2, 3, 3)
+    assert torch.equal(item["depth"][0], torch.from_numpy(s.depth))
