@@ -9,6 +9,8 @@ export ANNY_CACHE_DIR ?= $(CURDIR)/.cache/anny
 export WARP_CACHE_PATH ?= $(CURDIR)/.cache/warp
 export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
 
+PROBE := $(PY) -c "from synmitsuba.render.llvm import main; raise SystemExit(main(['--probe']))"
+
 .PHONY: setup llvm demo test test-all bench clean
 
 setup: $(STAMP) llvm
@@ -26,11 +28,11 @@ $(STAMP): pyproject.toml | $(PY)
 # drjit's LLVM backend needs libLLVM >= 16; probe it in a subprocess and install
 # Debian's libllvm19 when the present one cannot JIT.
 llvm: $(STAMP)
-	@if $(PY) -m synmitsuba.render.llvm --probe; then :; else \
+	@if $(PROBE); then :; else \
 	  echo "synmitsuba: installing libllvm19 (drjit needs libLLVM >= 16)"; \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq libllvm19 >/dev/null && \
-	  $(PY) -m synmitsuba.render.llvm --probe; \
+	  $(PROBE); \
 	fi
 
 demo: setup

@@ -94,8 +94,10 @@ def probe(timeout: float = 120.0) -> tuple[bool, str]:
     if res.returncode == 0:
         return True, f"LLVM {res.stdout.strip().splitlines()[-1]} ({path or 'drjit default'})"
     tail = (res.stderr or res.stdout).strip().splitlines()[-3:]
+    pinned = " DRJIT_LIBLLVM_PATH is set: unset it to let synmitsuba pick the newest libLLVM." \
+        if os.environ.get("DRJIT_LIBLLVM_PATH") else ""
     return False, (f"drjit's LLVM backend failed with {path or 'the default libLLVM'} "
-                   f"(exit {res.returncode}: {' | '.join(tail)}). {INSTALL_HINT}")
+                   f"(exit {res.returncode}: {' | '.join(tail)}). {INSTALL_HINT}{pinned}")
 
 
 def main(argv: list[str] | None = None) -> int:
