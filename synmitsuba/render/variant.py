@@ -15,14 +15,27 @@ DEFAULT_VARIANT = "llvm_ad_rgb"
 _state: dict = {"variant": None, "threads": None}
 
 
+def _cgroup_cpus() -> int | None:
+    """CPUs allowed by a cgroup v2 quota (containers, slurm), which affinity does not show."""
+    try:
+        quota, period = open("/sys/fs/cgroup/cpu.max").read().split()[:2]
+        return None if quota == "max" else max(1, int(int(quota) / int(period)))
+    except (OSError, ValueError):
+        return None
+
+
 def _threads() -> int:
     env = os.environ.get("SYNMITSUBA_THREADS")
     if env:
-        return max(1, int(env))
+        if not env.isdigit() or int(env) < 1:
+            raise ConfigError("SYNMITSUBA_THREADS", env, "give a positive integer")
+        return int(env)
     try:
-        return max(1, len(os.sched_getaffinity(0)))
+        n = len(os.sched_getaffinity(0))
     except AttributeError:  # macOS
-        return max(1, os.cpu_count() or 1)
+        n = os.cpu_count() or 1
+    quota = _cgroup_cpus()
+    return max(1, min(n, quota) if quota else n)
 
 
 def set_variant(name: str | None = None, threads: int | None = None) -> str:
