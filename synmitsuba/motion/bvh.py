@@ -100,7 +100,7 @@ def _scale(rest: np.ndarray, units: str | float) -> float:
         if units not in UNITS:
             raise ConfigError("units", units, f"use 'auto', a number of metres per unit or one of {', '.join(UNITS)}")
         return UNITS[units]
-    height = float(np.ptp(rest[:, 1])) or 1.0
+    height = float(np.ptp(rest, axis=0).max()) or 1.0  # the largest extent: height or arm span
     return min(UNITS.values(), key=lambda s: abs(np.log(height * s / 1.7)))
 
 

@@ -76,7 +76,7 @@ class Motion:
         i1 = np.minimum(i0 + 1, self.n_frames - 1)
         w = t - i0
         q = matrix_to_quat(self.rotations)
-        qi = slerp(q[i0], q[i1], np.broadcast_to(w[:, None], q.shape[:2]))
+        qi = slerp(q[i0], q[i1], np.broadcast_to(w[:, None], (n, q.shape[1])))
         root = self.root_translation[i0] * (1 - w)[:, None] + self.root_translation[i1] * w[:, None]
         return replace(self, rotations=quat_to_matrix(qi), root_translation=root, fps=float(fps))
 

@@ -17,7 +17,7 @@ from synmitsuba.motion.rotations import axis_rotation
 D = np.radians
 # kind -> {parameter: (low, high) sampled when not given, or a tuple of choices}
 PARAMS = {
-    "walk": {"speed": (1.0, 1.6), "stride": (1.2, 1.6), "amplitude": (0.7, 1.3), "style": ("normal", "relaxed", "brisk")},
+    "walk": {"speed": (1.0, 1.6), "stride": (1.0, 1.4), "amplitude": (0.7, 1.3), "style": ("normal", "relaxed", "brisk")},
     "jog": {"speed": (2.0, 3.0), "stride": (1.6, 2.2), "amplitude": (0.8, 1.2), "style": ("normal", "relaxed", "brisk")},
     "run": {"speed": (3.5, 5.0), "stride": (2.3, 3.0), "amplitude": (0.9, 1.2), "style": ("normal", "relaxed", "brisk")},
     "idle": {"amplitude": (0.5, 1.5), "style": ("calm", "restless")},
@@ -81,7 +81,7 @@ def _leg(p: _Pose, side: str, hip, knee, abduct=0.0, flat=True) -> None:
 
 
 GAIT = {  # stance fraction, foot lift (m), pelvis drop (m), pelvis bob (m), trunk lean, elbow bend
-    "walk": (0.62, 0.07, 0.03, 0.015, D(3), D(20)),
+    "walk": (0.60, 0.07, 0.02, 0.015, D(3), D(20)),
     "jog": (0.42, 0.14, 0.07, 0.03, D(8), D(75)),
     "run": (0.36, 0.22, 0.09, 0.04, D(12), D(90)),
 }
@@ -96,7 +96,7 @@ def _foot_track(t, f: float, offset: float, beta: float, step, lift: float):
     s = np.clip((u - beta) / (1 - beta), 0, 1)
     s = np.where(u < beta, 0.0, s * s * (3 - 2 * s))
     along = start + s / f  # in seconds of pelvis travel
-    height = np.where(u < beta, 0.0, lift * np.sin(np.pi * np.clip((u - beta) / (1 - beta), 0, 1)))
+    height = np.where(u < beta, 0.0, lift * np.sqrt(np.sin(np.pi * np.clip((u - beta) / (1 - beta), 0, 1))))
     return along, height
 
 
@@ -129,17 +129,27 @@ def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.nda
     f = speed / stride
     direction = np.array([lateral, 0.0, 0.0]) if lateral else np.array([0.0, 0.0, 1.0])
     n = len(t)
-    pelvis = np.zeros((n, 3))
-    pelvis[:, 1] = 0.95 - drop * style - bob * np.cos(4 * np.pi * f * t)
-    pelvis += (speed * t)[:, None] * direction
     sk = p.skel
+    pelvis = np.zeros((n, 3))
+    pelvis += (speed * t)[:, None] * direction
+    ankles, hips, reach = {}, {}, []
     for side, offset in (("left", 0.0), ("right", 0.5)):
         along, height = _foot_track(t, f, offset, beta, direction, lift * (0.6 if lateral else style))
-        rest_ankle = sk.rest_positions[sk.index(f"{side[0]}_ankle")]
-        ankle = rest_ankle + (speed * along)[:, None] * direction
+        ankle = sk.rest_positions[sk.index(f"{side[0]}_ankle")] + (speed * along)[:, None] * direction
         ankle[:, 1] += height
-        hip = pelvis + sk.offsets[sk.index(f"{side[0]}_hip")]
-        _leg_ik(p, side, hip, ankle)
+        hip_off = sk.offsets[sk.index(f"{side[0]}_hip")]
+        leg = 0.97 * (np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_knee")])
+                      + np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_ankle")]))
+        horiz = np.linalg.norm((ankle - pelvis - hip_off)[:, [0, 2]], axis=1)
+        reach.append(ankle[:, 1] + np.sqrt(np.maximum(leg ** 2 - horiz ** 2, 0.0)) - hip_off[1])
+        ankles[side], hips[side] = ankle, hip_off
+    nominal = 0.95 - drop * style - bob * np.cos(4 * np.pi * f * t)
+    y = np.minimum(nominal, np.minimum(*reach))  # low enough for both legs to reach their feet
+    kernel = np.exp(-0.5 * (np.arange(-4, 5) / 2.0) ** 2)
+    y_smooth = np.convolve(np.pad(y, 4, mode="edge"), kernel / kernel.sum(), mode="valid")
+    pelvis[:, 1] = np.minimum(y, y_smooth)
+    for side in ("left", "right"):
+        _leg_ik(p, side, pelvis + hips[side], ankles[side])
     phase = 2 * np.pi * f * t
     _arms_down(p, elbow=elbow)
     arm = a["amplitude"] * D(22) * style * (0.3 if lateral else 1.0)
@@ -232,8 +242,8 @@ def _jump(p: _Pose, t, a: dict) -> np.ndarray:
         _leg(p, side, D(80) * bend, D(100) * bend)
     p.rot("spine1", "x", D(25) * bend)
     air = (t >= t_off) & (t < t_land)
-    swing = np.where(air, 1.0, crouch)
-    _arms_down(p, drop=D(75) - D(120) * swing * (t >= t_off))
+    u = np.clip((t - 0.3) / 0.3, 0, 1) * np.clip((t_land + 0.5 - t) / 0.3, 0, 1)  # arms up around the flight
+    _arms_down(p, drop=D(75) - D(120) * u * u * (3 - 2 * u))
     tau = np.clip(t - t_off, 0, flight)
     return np.where(air, np.sqrt(2 * g * h) * tau - 0.5 * g * tau ** 2, 0.0)
 

@@ -1,0 +1,124 @@
+"""Retargeting as the SynBody paper states it.
+
+Model-space rotations come from forward kinematics, R^_i(t) = R^_p(i)(t) R_i(t). Both
+skeletons are brought to a common T-pose (frame 0): R^_i(0) for the target, R^_src(0) for the
+source, found by turning each bone onto the canonical humanoid's T-pose direction. Each target
+bone then takes its source bone's rotation relative to the T-pose,
+    R^_i(t) = R^_src(t) R^_src(0)^-1 R^_i(0),
+which equals the paper's R^_i(0) R^_src(t) R^_src(0)^-1 whenever R^_i(0) is the identity (a
+target whose rest pose is the T-pose, as in our Skeleton convention), and otherwise is the order
+that keeps bone directions equal between source and target. Root translation is scaled by the
+ratio of pelvis heights, T(t) = H_pelvis / H_pelvis_src * T_src(t).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from synmitsuba.body.skeleton import Skeleton
+from synmitsuba.errors import ConfigError
+from synmitsuba.motion.humanoid import humanoid_skeleton
+from synmitsuba.motion.motion import Motion
+from synmitsuba.motion.names import BONE_CHILD, canonical_map
+
+
+def _min_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Smallest rotation taking direction a to direction b."""
+    a = a / np.linalg.norm(a)
+    b = b / np.linalg.norm(b)
+    v, c = np.cross(a, b), float(a @ b)
+    if c < -1 + 1e-9:  # opposite: turn by pi about any perpendicular axis
+        axis = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+        axis /= np.linalg.norm(axis)
+        return 2 * np.outer(axis, axis) - np.eye(3)
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1 + c)
+
+
+def _descendant(sk: Skeleton, i: int, j: int) -> bool:
+    while j >= 0:
+        if j == i:
+            return True
+        j = sk.parents[j]
+    return False
+
+
+def tpose_globals(sk: Skeleton, canon: dict[str, str]) -> np.ndarray:
+    """Global rotations (J, 3, 3) that put ``sk`` into the canonical humanoid's T-pose."""
+    ref = humanoid_skeleton()
+    inv = {c: n for n, c in canon.items()}
+    G = np.empty((len(sk), 3, 3))
+    for i, name in enumerate(sk.names):
+        parent = G[sk.parents[i]] if sk.parents[i] >= 0 else np.eye(3)
+        G[i] = parent
+        c = canon.get(name)
+        child = BONE_CHILD.get(c) if c else None
+        if child is None or child not in inv:
+            continue
+        j = sk.index(inv[child])
+        if not _descendant(sk, i, j):
+            continue
+        d_rest = parent @ (sk.rest_positions[j] - sk.rest_positions[i])
+        d_ref = ref.rest_positions[ref.index(child)] - ref.rest_positions[ref.index(c)]
+        if np.linalg.norm(d_rest) > 1e-9:
+            G[i] = _min_rotation(d_rest, d_ref) @ parent
+    return G
+
+
+def pelvis_height(sk: Skeleton, root: int = 0) -> float:
+    """Height of the root joint above the lowest joint of the rest pose."""
+    return float(sk.rest_positions[root, 1] - sk.rest_positions[:, 1].min())
+
+
+def _pairs(src: Skeleton, tgt: Skeleton, name_map: dict | None) -> dict[int, int]:
+    """{target joint index: source joint index}."""
+    if name_map is not None:
+        bad = [k for k in name_map if k not in src.names] + [v for v in name_map.values() if v not in tgt.names]
+        if bad:
+            raise ConfigError("name_map", bad[0], "names must be source joints -> target joints")
+        return {tgt.index(t): src.index(s) for s, t in name_map.items()}
+    if src.names == tgt.names:
+        return {i: i for i in range(len(tgt))}
+    cs, ct = canonical_map(src.names), canonical_map(tgt.names)
+    inv_s = {c: n for n, c in cs.items()}
+    pairs = {tgt.index(n): src.index(inv_s[c]) for n, c in ct.items() if c in inv_s}
+    if len(pairs) < 6:
+        raise ConfigError("name_map", None, "could not match the skeletons' joint names (found "
+                          f"{len(pairs)} pairs); pass name_map={{source joint: target joint}}")
+    return pairs
+
+
+def retarget(motion: Motion, target: Skeleton, name_map: dict | None = None) -> Motion:
+    """The motion on ``target``: mapped bones follow the source bones' model-space rotations
+    relative to the common T-pose; unmapped ones keep their T-pose; the root translation is
+    scaled by the pelvis height ratio."""
+    src = motion.skeleton
+    pairs = _pairs(src, target, name_map)
+    same = src.names == target.names and np.allclose(src.rest_positions, target.rest_positions)
+    if same:
+        S0 = T0 = np.broadcast_to(np.eye(3), (len(target), 3, 3))
+    else:
+        S0 = tpose_globals(src, canonical_map(src.names))
+        T0 = tpose_globals(target, canonical_map(target.names))
+    Gs = motion.global_rotations()
+    F = motion.n_frames
+    G = np.empty((F, len(target), 3, 3))
+    R = np.empty_like(G)
+    for i in range(len(target)):
+        p = target.parents[i]
+        if i in pairs:
+            s = pairs[i]
+            G[:, i] = Gs[:, s] @ (S0[s].T @ T0[i])
+        else:
+            G[:, i] = (G[:, p] if p >= 0 else np.eye(3)) @ ((T0[p].T if p >= 0 else np.eye(3)) @ T0[i])
+        R[:, i] = G[:, i] if p < 0 else np.swapaxes(G[:, p], -1, -2) @ G[:, i]
+    s_root = pairs.get(0, 0)
+    ratio = pelvis_height(target) / max(pelvis_height(src, s_root), 1e-9)
+    if same:
+        ratio = 1.0
+    world_root = src.rest_positions[s_root] + motion.root_translation if s_root == 0 else \
+        motion.joint_positions()[:, s_root]
+    root = ratio * world_root - target.rest_positions[0]
+    return replace(motion, skeleton=target, rotations=R, root_translation=root,
+                   meta={**motion.meta, "retargeted_from": list(src.names[:3]), "pelvis_ratio": ratio})

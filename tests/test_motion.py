@@ -1,0 +1,271 @@
+"""Motion: BVH import against scipy's Euler conventions, retargeting, clips, procedural motions."""
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import synmitsuba as sm
+from synmitsuba.errors import ConfigError
+from synmitsuba.motion.bvh import BVHError
+from synmitsuba.motion.retarget import pelvis_height
+
+BVH = """HIERARCHY
+ROOT Hips
+{{
+  OFFSET 0 {h} 0
+  CHANNELS 6 Xposition Yposition Zposition {root_order}
+  JOINT Chest
+  {{
+    OFFSET 0 {c} 0
+    CHANNELS 3 {order}
+    JOINT LeftArm
+    {{
+      OFFSET {a} 0 0
+      CHANNELS 3 {order}
+      End Site
+      {{
+        OFFSET {a} 0 0
+      }}
+    }}
+  }}
+}}
+MOTION
+Frames: 2
+Frame Time: 0.0083333
+{frames}
+"""
+
+
+def rotations(order):
+    return " ".join(f"{c}rotation" for c in order)
+
+
+@pytest.mark.parametrize("order", ["ZXY", "XYZ", "ZYX", "YZX"])
+def test_bvh_forward_kinematics_matches_scipy(order, tmp_path):
+    rng = np.random.default_rng(1)
+    ang = np.round(rng.uniform(-60, 60, (2, 3, 3)), 4)
+    root = np.array([[10.0, 90.0, -5.0], [12.0, 91.0, -3.0]])
+    lines = [" ".join(f"{x:.6f}" for x in np.concatenate([root[f], ang[f].ravel()])) for f in range(2)]
+    text = BVH.format(h=90, c=40, a=30, root_order=rotations(order), order=rotations(order), frames="\n".join(lines))
+    path = tmp_path / "t.bvh"
+    path.write_text(text)
+    m = sm.load_bvh(path, units="cm")
+    assert m.skeleton.names == ("Hips", "Chest", "LeftArm", "LeftArm_end")
+    assert m.fps == pytest.approx(120.0, rel=1e-4)
+    pos = m.joint_positions()
+    for f in range(2):
+        R = [Rotation.from_euler(order, ang[f, j], degrees=True) for j in range(3)]
+        hips = root[f] / 100
+        chest = hips + R[0].apply([0, 0.40, 0])
+        arm = chest + (R[0] * R[1]).apply([0.30, 0, 0])
+        end = arm + (R[0] * R[1] * R[2]).apply([0.30, 0, 0])
+        np.testing.assert_allclose(pos[f], [hips, chest, arm, end], atol=1e-9)
+
+
+def test_bvh_units_are_detected(tmp_path):
+    frames = "0 0 0 0 0 0 0 0 0 0 0 0"
+    for unit, scale in [("cm", 1.0), ("m", 0.01), ("inch", 1 / 2.54)]:
+        text = BVH.format(h=90 * scale, c=80 * scale, a=80 * scale, root_order=rotations("ZXY"),
+                          order=rotations("ZXY"), frames=frames + "\n" + frames)
+        (tmp_path / f"{unit}.bvh").write_text(text)
+        m = sm.load_bvh(tmp_path / f"{unit}.bvh")
+        assert m.meta["metres_per_unit"] == pytest.approx({"cm": 0.01, "m": 1.0, "inch": 0.0254}[unit])
+        assert m.skeleton.rest_positions[1, 1] == pytest.approx(1.70)
+
+
+@pytest.mark.parametrize("mutate,where", [
+    (lambda t: t.replace("OFFSET 0 40 0", "OFFSET 0 forty 0"), "line 8"),
+    (lambda t: t.replace("CHANNELS 3", "CHANNELS 3 Wrotation", 1), "line 9"),
+    (lambda t: t.rsplit("\n", 2)[0] + "\n1 2 3\n", "frame 2"),
+    (lambda t: t.replace("Frame Time: 0.0083333", "Frame Time: 0"), "Frame Time"),
+])
+def test_malformed_bvh_names_the_line(mutate, where, tmp_path):
+    frames = "0 90 0 0 0 0 0 0 0 0 0 0\n0 90 0 0 0 0 0 0 0 0 0 0"
+    text = BVH.format(h=90, c=40, a=30, root_order=rotations("ZXY"), order=rotations("ZXY"), frames=frames)
+    (tmp_path / "bad.bvh").write_text(mutate(text))
+    with pytest.raises(BVHError) as e:
+        sm.load_bvh(tmp_path / "bad.bvh")
+    assert "bad.bvh" in str(e.value) and where in str(e.value)
+
+
+def test_identity_retarget():
+    m = sm.procedural_motion("walk", np.random.default_rng(0), seconds=1.0)
+    r = sm.retarget(m, m.skeleton)
+    assert np.abs(r.rotations - m.rotations).max() <= 1e-5
+    assert np.abs(r.joint_positions() - m.joint_positions()).max() <= 1e-5
+
+
+def a_pose_giant(scale=1.25):
+    """The humanoid, 25% taller, with an A-pose rest (arms 45 deg down) and longer forearms."""
+    h = sm.humanoid_skeleton()
+    rest = h.rest_positions * scale
+    for side, s in (("l", 1), ("r", -1)):
+        sh = rest[h.index(f"{side}_shoulder")]
+        for j in ("elbow", "wrist", "hand_end"):
+            i = h.index(f"{side}_{j}")
+            v = rest[i] - sh
+            if j != "elbow":
+                v = v * 1.1
+            rest[i] = sh + np.array([v[0] * np.cos(np.pi / 4), -abs(v[0]) * np.sin(np.pi / 4), v[2]])
+    return rest
+
+
+def bone_dirs(m, pairs):
+    p = m.joint_positions()
+    d = np.stack([p[:, c] - p[:, j] for j, c in pairs], 1)
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def test_retarget_keeps_bone_directions_and_scales_root():
+    from synmitsuba.body.skeleton import Skeleton
+    src = sm.procedural_motion("jog", np.random.default_rng(3), seconds=1.0)
+    h = src.skeleton
+    tgt_rest = a_pose_giant()
+    target = Skeleton(h.names, h.parents, tgt_rest)
+    r = sm.retarget(src, target)
+    bones = [(h.index(a), h.index(b)) for a, b in [("l_shoulder", "l_elbow"), ("l_elbow", "l_wrist"),
+                                                   ("r_hip", "r_knee"), ("r_knee", "r_ankle"), ("spine1", "spine2")]]
+    assert np.abs(bone_dirs(r, bones) - bone_dirs(src, bones)).max() < 1e-6
+    ratio = pelvis_height(target) / pelvis_height(h)
+    assert ratio == pytest.approx(1.25)
+    np.testing.assert_allclose(r.joint_positions()[:, 0], ratio * src.joint_positions()[:, 0], atol=1e-9)
+
+
+def test_retarget_cmu_names_onto_humanoid(tmp_path):
+    """A CMU-named BVH drives the humanoid through the built-in name map."""
+    names = ["Hips", "LowerBack", "Spine", "Spine1", "Neck", "Head"]
+    text = "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n"
+    depth = 1
+    for n in names[1:]:
+        text += f"JOINT {n}\n{{\n OFFSET 0 4 0\n CHANNELS 3 Zrotation Yrotation Xrotation\n"
+        depth += 1
+    text += "End Site\n{\n OFFSET 0 3 0\n}\n" + "}\n" * depth
+    legs = ""
+    text = text.replace("JOINT LowerBack", legs + "JOINT LowerBack")
+    frames = ["0 17 0 0 0 0 " + " ".join(["0 0 30"] * 5), "0 17 0 0 0 0 " + " ".join(["0 0 30"] * 5)]
+    text += "MOTION\nFrames: 2\nFrame Time: 0.0083333\n" + "\n".join(frames) + "\n"
+    (tmp_path / "cmu.bvh").write_text(text)
+    m = sm.load_bvh(tmp_path / "cmu.bvh", units="cmu")
+    with pytest.raises(ConfigError):  # six spine joints only: legs and arms cannot be matched
+        sm.retarget(m, sm.humanoid_skeleton(), name_map={"Hips": "nope"})
+    r = sm.retarget(m, sm.humanoid_skeleton(), name_map={n: c for n, c in zip(names, ["pelvis", "spine1", "spine2", "chest", "neck", "head"])})
+    # each spine joint bends 30 deg about x: the neck->head bone tilts by 5 x 30 deg in both
+    src_dir = np.diff(m.joint_positions()[0, [4, 5]], axis=0)[0]
+    h = sm.humanoid_skeleton()
+    tgt_dir = np.diff(r.joint_positions()[0, [h.index("neck"), h.index("head")]], axis=0)[0]
+    assert np.allclose(src_dir / np.linalg.norm(src_dir), tgt_dir / np.linalg.norm(tgt_dir), atol=1e-6)
+
+
+def test_resample_slerps_rotations():
+    h = sm.humanoid_skeleton()
+    F, fps = 121, 120.0
+    t = np.arange(F) / fps
+    R = np.broadcast_to(np.eye(3), (F, len(h), 3, 3)).copy()
+    R[:, h.index("neck")] = Rotation.from_euler("y", 2.0 * t[:, None]).as_matrix()  # 2 rad/s about y
+    m = sm.Motion(h, R, np.stack([t, 0 * t, 0 * t], 1), fps)
+    r = m.resample(30)
+    assert r.n_frames == 31 and r.fps == 30
+    want = Rotation.from_euler("y", 2.0 * np.arange(31)[:, None] / 30).as_matrix()
+    assert np.abs(r.rotations[:, h.index("neck")] - want).max() < 1e-9
+    np.testing.assert_allclose(r.root_translation[:, 0], np.arange(31) / 30, atol=1e-12)
+    # 7/120 s steps don't land on source frames: interpolated angles stay exact for a constant rate
+    r7 = m.resample(120 / 7)
+    assert np.abs(r7.rotations[:, h.index("neck")] - Rotation.from_euler("y", 2.0 * np.arange(r7.n_frames)[:, None] * 7 / 120).as_matrix()).max() < 1e-9
+
+
+def test_clips_filters_and_library(tmp_path):
+    rng = np.random.default_rng(0)
+    long = sm.procedural_motion("walk", rng, seconds=5.0, fps=60)
+    clip = sm.random_window(long, rng)
+    assert clip.n_frames == 60 and clip.fps == 30
+    with pytest.raises(ConfigError):
+        sm.random_window(sm.procedural_motion("walk", rng, seconds=1.5), rng)
+    assert sm.is_allowed(["walk forward"]) and not sm.is_allowed(["sit down on chair"])
+    assert not sm.is_allowed(["swim"]) and not sm.is_allowed(["fall and get up"])
+    # a user folder: one short clip, one excluded by label, one usable
+    for name, n in [("wave_hello", 300), ("short", 120), ("sit_down", 300)]:
+        frames = "\n".join(["0 90 0 0 0 0 0 0 0 0 0 0"] * n)
+        text = BVH.format(h=90, c=40, a=30, root_order=rotations("ZXY"), order=rotations("ZXY"), frames=frames)
+        (tmp_path / f"{name}.bvh").write_text(text.replace("Frames: 2", f"Frames: {n}"))
+    (tmp_path / "labels.json").write_text(json.dumps({"wave_hello.bvh": ["wave", "greet"]}))
+    lib = sm.MotionLibrary.default()
+    assert lib.add_folder(str(tmp_path)) == 3
+    usable = lib.filter().entries
+    names = {e.name for e in usable}
+    assert "wave_hello" in names and "short" not in names and "sit_down" not in names
+    assert {"walk", "run", "jump"} <= names
+
+
+@pytest.mark.parametrize("kind", sm.MOTION_KINDS)
+def test_procedural_motions_are_plausible(kind):
+    m = sm.procedural_motion(kind, np.random.default_rng(7), seconds=2.0)
+    assert m.n_frames == 60 and m.labels == (kind,)
+    R = m.rotations
+    assert np.allclose(R @ np.swapaxes(R, -1, -2), np.eye(3), atol=1e-9)
+    angles = np.degrees(np.arccos(np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1, 1)))
+    assert angles.max() < 170  # within plausible joint ranges
+    step = np.degrees(np.arccos(np.clip((np.trace(np.swapaxes(R[1:], -1, -2) @ R[:-1], axis1=-2, axis2=-1) - 1) / 2, -1, 1)))
+    assert step.max() < 30  # smooth: < 900 deg/s at 30 fps
+    y = m.joint_positions()[..., 1]
+    assert y.min() > -0.01
+    on_ground = np.abs(y.min(1)) < 0.01
+    if kind in ("jog", "run", "jump"):  # these have flight phases, but not all the time
+        assert 0.3 < on_ground.mean() < 1.0
+    else:
+        assert on_ground.all()  # a foot on the ground in every frame
+
+
+@pytest.mark.parametrize("kind,limit", [("walk", 0.03), ("jog", 0.03), ("run", 0.03), ("side_step", 0.08),
+                                        ("idle", 0.01), ("squat", 0.01)])
+def test_feet_stay_planted(kind, limit):
+    for seed in range(3):
+        m = sm.procedural_motion(kind, np.random.default_rng(seed), seconds=2.0)
+        assert sm.foot_sliding(m) < limit, (kind, seed)
+
+
+def test_walk_parameters_change_the_motion():
+    base = dict(speed=1.2, stride=1.4, amplitude=1.0, style="normal")
+    ref = sm.procedural_motion("walk", np.random.default_rng(0), **base)
+    assert ref.root_translation[-1, 2] == pytest.approx(1.2 * 59 / 30, rel=1e-6)
+    for key, value in [("speed", 1.5), ("stride", 1.2), ("amplitude", 1.3), ("style", "brisk")]:
+        other = sm.procedural_motion("walk", np.random.default_rng(0), **{**base, key: value})
+        assert not np.allclose(other.rotations, ref.rotations), key
+
+
+def test_amass_synthetic_npz(tmp_path):
+    F = 12
+    rng = np.random.default_rng(0)
+    trans = np.tile([0.4, -0.2, 0.95], (F, 1))
+    trans[:, 0] += np.linspace(0, 0.5, F)
+    np.savez(tmp_path / "a.npz", root_orient=np.tile([np.pi / 2, 0, 0], (F, 1)), pose_body=np.zeros((F, 63)),
+             pose_hand=rng.normal(0, 0.1, (F, 90)), pose_jaw=np.zeros((F, 3)), trans=trans, betas=np.zeros(16),
+             mocap_frame_rate=np.array(60.0))
+    m = sm.load_amass(tmp_path / "a.npz")
+    assert m.fps == 60 and len(m.skeleton) == 55
+    pos = m.joint_positions()
+    sk = m.skeleton
+    head, pelvis = pos[:, sk.index("head")], pos[:, sk.index("pelvis")]
+    assert (head[:, 1] - pelvis[:, 1] > 0.5).all()  # upright in y-up
+    # AMASS z-up (x, y, z) -> our (x, z, -y): pelvis = J0 + trans
+    np.testing.assert_allclose(pelvis[:, 0], trans[:, 0] + 0.0031, atol=1e-9)
+    np.testing.assert_allclose(pelvis[:, 1], trans[:, 2] + 0.0120, atol=1e-9)
+    np.testing.assert_allclose(pelvis[:, 2], -(trans[:, 1] - 0.3514), atol=1e-9)
+    r = sm.retarget(m, sm.humanoid_skeleton())
+    assert r.n_frames == F and np.isfinite(r.rotations).all()
+    with pytest.raises(ConfigError) as e:
+        np.savez(tmp_path / "b.npz", trans=trans)
+        sm.load_amass(tmp_path / "b.npz")
+    assert "root_orient" in str(e.value)
+
+
+def test_bad_motion_requests():
+    with pytest.raises(ConfigError) as e:
+        sm.procedural_motion("moonwalk", np.random.default_rng(0))
+    assert "moonwalk" in str(e.value) and "walk" in str(e.value)
+    with pytest.raises(ConfigError) as e:
+        sm.procedural_motion("walk", np.random.default_rng(0), sped=1.0)
+    assert "walk.sped" in str(e.value)
+    m = sm.procedural_motion("idle", np.random.default_rng(0), seconds=1.0)
+    with pytest.raises(ConfigError):
+        m.clip(0.5, 1.0)
