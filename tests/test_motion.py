@@ -269,3 +269,14 @@ def test_bad_motion_requests():
     m = sm.procedural_motion("idle", np.random.default_rng(0), seconds=1.0)
     with pytest.raises(ConfigError):
         m.clip(0.5, 1.0)
+
+
+def test_motion_preview_cli_writes_a_strip(tmp_path):
+    from PIL import Image
+
+    from synmitsuba.cli import main
+    assert main(["motion", "preview", "walk", "--out", str(tmp_path), "--frames", "3", "--res", "40x50",
+                 "--spp", "2", "--stick"]) == 0
+    img = np.asarray(Image.open(tmp_path / "walk_strip.png"))
+    assert img.shape[1] > 3 * 40 and img.shape[0] >= 50
+    assert img[..., 0].std() > 5  # not a blank picture
