@@ -16,12 +16,8 @@ from synmitsuba.errors import ConfigError
 from synmitsuba.motion.motion import Motion
 from synmitsuba.motion.rotations import axis_angle_to_matrix
 
-_BODY = ["pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2", "left_ankle",
-         "right_ankle", "spine3", "left_foot", "right_foot", "neck", "left_collar", "right_collar", "head",
-         "left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist",
-         "jaw", "left_eye_smplhf", "right_eye_smplhf"]
-_FINGERS = [f"{f}{k}" for f in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3)]
-SMPLX_JOINTS = tuple(_BODY + [f"left_{f}" for f in _FINGERS] + [f"right_{f}" for f in _FINGERS])
+from synmitsuba.motion_names import _FINGERS
+from synmitsuba.motion_names import SMPLX_JOINT_NAMES as SMPLX_JOINTS
 _BODY_PARENTS = [-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 15, 15, 15]
 
 

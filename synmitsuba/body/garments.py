@@ -1,0 +1,240 @@
+"""Procedural garments: shells offset from body regions (tops, bottoms, dress, shoes) and a
+flared skirt surface; all bound to the body by closest-point weight transfer.
+
+Each garment has ``size`` (S..XL as 0..1, scales the ease), ``ease`` (looseness, metres),
+``length`` (0..1 along its range: hem height for tops, leg length for bottoms, sleeve length
+for sleeves) and ``thickness`` (metres). In the rest pose no garment vertex lies inside the body
+(vertices that would are pushed out along the surface normal) and layers nest: bottoms < tops <
+jackets in offset.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from synmitsuba.body.binding import closest_points, signed_distance
+from synmitsuba.body.textures import GarmentTextureParams, _check
+from synmitsuba.body.topology import submesh, vertex_normals
+from synmitsuba.errors import ConfigError
+from synmitsuba.scene.layers import Layer
+
+KINDS = ("tshirt", "longsleeve", "jacket", "shorts", "trousers", "skirt", "dress", "shoes")
+LAYER = {"tshirt": Layer.TOP, "longsleeve": Layer.TOP, "jacket": Layer.TOP, "shorts": Layer.BOTTOM,
+         "trousers": Layer.BOTTOM, "skirt": Layer.BOTTOM, "dress": Layer.DRESS, "shoes": Layer.SHOES}
+BASE_OFFSET = {"shoes": 0.004, "shorts": 0.005, "trousers": 0.005, "skirt": 0.006, "tshirt": 0.012,
+               "longsleeve": 0.012, "dress": 0.012, "jacket": 0.03}
+CLEARANCE = 0.002
+GROUPS = {
+    "torso": ("root", "pelvis", "spine", "clavicle", "shoulder01"),
+    "upperarm": ("upperarm",), "lowerarm": ("lowerarm",), "hand": ("wrist", "finger", "metacarpal"),
+    "upperleg": ("upperleg",), "lowerleg": ("lowerleg",), "foot": ("foot", "toe"),
+    "head": ("neck", "head", "eye"),
+}
+
+
+@dataclass
+class GarmentParams:
+    kind: str = "tshirt"
+    size: float = 0.5
+    ease: float = 0.01
+    length: float = 0.5
+    thickness: float = 0.003
+    texture: GarmentTextureParams = field(default_factory=GarmentTextureParams)
+
+    def validate(self, where: str = "garment") -> None:
+        _check(where, "kind", self.kind, choices=KINDS)
+        _check(where, "size", self.size, 0, 1)
+        _check(where, "ease", self.ease, 0, 0.06)
+        _check(where, "length", self.length, 0, 1)
+        _check(where, "thickness", self.thickness, 0.0005, 0.02)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["texture"] = self.texture.to_dict()
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "garment") -> "GarmentParams":
+        allowed = {"kind", "size", "ease", "length", "thickness", "texture"}
+        for k in d:
+            if k not in allowed:
+                raise ConfigError(f"{where}.{k}", d[k], f"unknown field; fields: {', '.join(sorted(allowed))}")
+        tex = GarmentTextureParams.from_dict(d.get("texture", {}), f"{where}.texture")
+        g = cls(**{k: v for k, v in d.items() if k != "texture"}, texture=tex)
+        g.validate(where)
+        return g
+
+
+def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
+    from synmitsuba.body.textures import sample_garment_texture
+    length = {"tshirt": (0.2, 0.7), "longsleeve": (0.3, 0.8), "jacket": (0.4, 1.0), "shorts": (0.1, 0.45),
+              "trousers": (0.85, 1.0), "skirt": (0.2, 0.8), "dress": (0.3, 0.9), "shoes": (0.2, 0.8)}[kind]
+    ease = (0.005, 0.03) if kind in ("jacket", "skirt", "dress") else (0.0, 0.015)
+    return GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*ease)), 4),
+                         length=round(float(rng.uniform(*length)), 3),
+                         thickness=round(float(rng.uniform(0.002, 0.006 if kind != "jacket" else 0.01)), 4),
+                         texture=sample_garment_texture(rng))
+
+
+@dataclass
+class BodyRegions:
+    """Per-vertex group names and landmark heights of a shaped rest body."""
+
+    group: np.ndarray        # (V,) group name per vertex
+    normals: np.ndarray
+    arm_s: np.ndarray        # (V,) 0 at the shoulder .. 1 at the wrist (arm vertices)
+    leg_s: np.ndarray        # (V,) 0 at the hip .. 1 at the ankle (leg vertices)
+    waist_y: float
+    hip_y: float
+    crotch_y: float
+    neck_y: float
+
+
+def body_regions(body) -> BodyRegions:
+    sk = body.skeleton
+    bones = np.array([next((g for g, keys in GROUPS.items() if any(k in name for k in keys)), "torso")
+                      for name in sk.names])
+    group = bones[body.weights.argmax(1)]
+    v = body.vertices
+    arm_s = np.zeros(len(v))
+    leg_s = np.zeros(len(v))
+    for side in ("L", "R"):
+        sh, wr = sk.rest_positions[sk.index(f"upperarm01.{side}")], sk.rest_positions[sk.index(f"wrist.{side}")]
+        axis = wr - sh
+        arm = np.isin(group, ["upperarm", "lowerarm"]) & ((v[:, 0] > 0) == (side == "L"))
+        arm_s[arm] = ((v[arm] - sh) @ axis) / (axis @ axis)
+        hip, ank = sk.rest_positions[sk.index(f"upperleg01.{side}")], sk.rest_positions[sk.index(f"foot.{side}")]
+        leg = np.isin(group, ["upperleg", "lowerleg"]) & ((v[:, 0] > 0) == (side == "L"))
+        leg_s[leg] = (hip[1] - v[leg, 1]) / (hip[1] - ank[1])
+    hip_y = float(sk.rest_positions[sk.index("upperleg01.L"), 1])
+    return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s,
+                       waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y,
+                       crotch_y=hip_y - 0.07, neck_y=float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01)
+
+
+def _region(kind: str, g: GarmentParams, r: BodyRegions, v: np.ndarray) -> np.ndarray:
+    y = v[:, 1]
+    torso, legs = r.group == "torso", np.isin(r.group, ["upperleg", "lowerleg"])
+    arms = np.isin(r.group, ["upperarm", "lowerarm"])
+    if kind in ("tshirt", "longsleeve", "jacket", "dress"):
+        hem = r.waist_y - (r.waist_y - (r.crotch_y - 0.12)) * (g.length if kind != "dress" else 0.6)
+        sleeve = {"tshirt": 0.15 + 0.25 * g.length, "longsleeve": 0.85 + 0.1 * g.length,
+                  "jacket": 0.9 + 0.08 * g.length, "dress": 0.2 * g.length}[kind]
+        keep = ((torso | legs) & (y >= hem) & (y <= r.neck_y)) | (arms & (r.arm_s <= sleeve))
+        if kind == "dress":
+            keep &= y >= r.hip_y - 0.02  # the skirt part is a separate flared surface
+        return keep
+    if kind in ("shorts", "trousers"):
+        reach = {"shorts": 0.1 + 0.35 * g.length, "trousers": 0.75 + 0.27 * g.length}[kind]
+        return ((torso & (y <= r.waist_y)) | (legs & (r.leg_s <= reach))) & (y <= r.waist_y)
+    if kind == "skirt":
+        return torso & (y <= r.waist_y) & (y >= r.hip_y - 0.02)
+    if kind == "shoes":
+        ankle = r.group == "lowerleg"
+        return (r.group == "foot") | (ankle & (r.leg_s >= 1.0 - 0.08 * g.length))
+    raise ConfigError("garment.kind", kind, f"use one of {', '.join(KINDS)}")
+
+
+def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, n_seg: int = 48):
+    """A skirt surface from top_y down, flaring outwards, outside every body vertex it passes."""
+    v = body.vertices
+    bottom = r.hip_y - 0.1 - (r.hip_y - 0.1 - 0.15) * g.length
+    heights = np.linspace(top_y, bottom, 14)
+    centre = v[(v[:, 1] < top_y) & (v[:, 1] > bottom)][:, [0, 2]].mean(0)
+    ang = np.linspace(0, 2 * np.pi, n_seg, endpoint=False)
+    d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
+    rings = []
+    prev = None
+    for k, h in enumerate(heights):
+        band = v[np.abs(v[:, 1] - h) < 0.03][:, [0, 2]] - centre
+        reach = np.array([(band @ di).max() if len(band) else 0.05 for di in d])
+        # the support of the body in each direction; smooth it around the ring
+        reach = np.maximum(reach, np.convolve(np.pad(reach, 3, mode="wrap"), np.ones(7) / 7, "valid"))
+        radius = reach + offset + (0.06 + 0.4 * g.ease) * (k / (len(heights) - 1)) ** 1.3
+        if prev is not None:
+            radius = np.maximum(radius, prev)  # never narrows downwards
+        prev = radius
+        rings.append(np.column_stack([centre[0] + radius * d[:, 0], np.full(n_seg, h), centre[1] + radius * d[:, 1]]))
+    verts = np.concatenate(rings)
+    faces = []
+    for k in range(len(heights) - 1):
+        for j in range(n_seg):
+            a, b = k * n_seg + j, k * n_seg + (j + 1) % n_seg
+            c, e = a + n_seg, b + n_seg
+            faces += [[a, c, b], [b, c, e]]
+    uv = np.column_stack([np.tile(ang / (2 * np.pi), len(heights)), np.repeat(np.linspace(1, 0, len(heights)), n_seg)])
+    return verts, np.array(faces), uv
+
+
+def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
+    """Each shoe is the convex hull of its foot (and ankle, by ``length``), grown by ``offset``
+    and subdivided; a convex shell cannot cut into the toes. UVs by cylindrical projection."""
+    import trimesh
+    keep = _region("shoes", g, r, body.vertices)
+    parts = []
+    for side in (1, -1):
+        pts = body.vertices[keep & (np.sign(body.vertices[:, 0]) == side)]
+        hull = trimesh.convex.convex_hull(pts)
+        n = hull.vertex_normals
+        grown = trimesh.Trimesh(hull.vertices + n * offset, hull.faces, process=False)
+        v, f = trimesh.remesh.subdivide_to_size(grown.vertices, grown.faces, max_edge=0.02)
+        parts.append((v, f))
+    v = np.concatenate([parts[0][0], parts[1][0]])
+    f = np.concatenate([parts[0][1], parts[1][1] + len(parts[0][0])])
+    c = v.mean(0)
+    uv = np.column_stack([(np.arctan2(v[:, 0] - c[0], v[:, 2] - c[2]) / (2 * np.pi)) % 1.0, v[:, 1] / 0.3])
+    return v, f, uv
+
+
+def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int = 3) -> np.ndarray:
+    """Move points that are inside or closer than ``clearance`` to the body out along the normal."""
+    p = points.copy()
+    for _ in range(rounds):
+        d = signed_distance(body.vertices, body.faces, p)
+        bad = d < clearance
+        if not bad.any():
+            break
+        closest, tri, _ = closest_points(body.vertices, body.faces, p[bad])
+        tv = body.vertices[body.faces[tri]]
+        n = np.cross(tv[:, 1] - tv[:, 0], tv[:, 2] - tv[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        p[bad] = closest + n * clearance * 1.5
+    return p
+
+
+@dataclass
+class GarmentMesh:
+    params: GarmentParams
+    vertices: np.ndarray
+    faces: np.ndarray
+    uv: np.ndarray
+    layer: int
+    offset: float
+
+
+def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
+    size = 0.7 + 0.6 * g.size
+    return max(BASE_OFFSET[g.kind] + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
+
+
+def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0) -> GarmentMesh:
+    """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology."""
+    offset = garment_offset(g, below)
+    if g.kind == "skirt":
+        v, f, uv = _flare(body, r, g, offset, r.waist_y)
+    elif g.kind == "shoes":
+        v, f, uv = _shoes(body, r, g, offset)
+    else:
+        keep = _region(g.kind, g, r, body.vertices)
+        keep_split = keep[split.source]
+        used, f = submesh(split.faces, keep_split)
+        src = split.source[used]
+        v = body.vertices[src] + r.normals[src] * offset
+        uv = split.uv[used]
+        if g.kind == "dress":
+            sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
+            f = np.concatenate([f, sf + len(v)])
+            v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
+    v = push_out(body, v)
+    return GarmentMesh(g, v, f, uv, int(LAYER[g.kind]), offset)

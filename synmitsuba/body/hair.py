@@ -1,0 +1,224 @@
+"""Strand hair as Mitsuba B-spline curves, rooted on scalp regions and shaped by style.
+
+Scalp regions (fringe, top, temporal, occipital, lower_back, and the beard area) are labelled
+geometrically in a head frame (origin at the head centre, up, forward). Each style sets a
+length per region, how strands fall (gravity), and curliness; strands are pushed out of a head
+proxy ellipsoid so they never enter the head. Strands are rigid with the head bone.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from synmitsuba.body.textures import _check, _from_dict
+from synmitsuba.errors import ConfigError
+
+REGIONS = ("fringe", "top", "temporal", "occipital", "lower_back", "beard")
+# style -> length (m) per scalp region (fringe, top, temporal, occipital, lower_back), gravity, volume
+STYLES = {
+    "bald": (0, 0, 0, 0, 0, 0.0, 0.0),
+    "buzz": (0.008, 0.01, 0.008, 0.008, 0.006, 0.0, 0.3),
+    "short": (0.04, 0.05, 0.03, 0.04, 0.025, 0.4, 0.5),
+    "crew": (0.03, 0.06, 0.015, 0.02, 0.012, 0.2, 0.6),
+    "bob": (0.10, 0.16, 0.16, 0.17, 0.15, 0.9, 0.4),
+    "shoulder": (0.12, 0.26, 0.26, 0.28, 0.26, 1.0, 0.3),
+    "long": (0.16, 0.42, 0.42, 0.45, 0.42, 1.0, 0.25),
+    "curly": (0.08, 0.12, 0.10, 0.12, 0.10, 0.5, 0.9),
+    "afro": (0.09, 0.11, 0.10, 0.10, 0.08, -0.2, 1.0),
+    "fringe": (0.12, 0.10, 0.07, 0.08, 0.06, 0.8, 0.4),
+}
+BEARDS = {"none": 0.0, "stubble": 0.004, "goatee": 0.025, "mustache": 0.015, "full": 0.035}
+
+
+@dataclass
+class HairParams:
+    style: str = "short"
+    beard: str = "none"
+    length: float = 1.0        # multiplies the style's lengths
+    curliness: float = 0.2     # 0 straight .. 1 tight curls
+    density: float = 0.5       # 0..1 -> strand count
+    melanin: float = 0.5       # 0 blond .. 1 black
+    redness: float = 0.1       # pheomelanin share
+    seed: int = 0
+
+    def validate(self, where: str = "hair") -> None:
+        _check(where, "style", self.style, choices=tuple(STYLES))
+        _check(where, "beard", self.beard, choices=tuple(BEARDS))
+        _check(where, "length", self.length, 0.3, 2.0)
+        for name in ("curliness", "density", "melanin", "redness"):
+            _check(where, name, getattr(self, name), 0, 1)
+        _check(where, "seed", self.seed, 0, 2 ** 31)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "hair") -> "HairParams":
+        return _from_dict(cls, d, where)
+
+
+def sample_hair(rng: np.random.Generator, beard_allowed: bool = True) -> HairParams:
+    style = str(rng.choice(list(STYLES)))
+    beard = str(rng.choice(list(BEARDS), p=[0.6, 0.1, 0.1, 0.1, 0.1])) if beard_allowed else "none"
+    return HairParams(style=style, beard=beard, length=round(float(rng.uniform(0.7, 1.3)), 3),
+                      curliness=round(float(rng.uniform(0.6, 1.0) if style in ("curly", "afro") else rng.uniform(0, 0.4)), 3),
+                      density=round(float(rng.uniform(0.3, 1.0)), 3), melanin=round(float(rng.beta(2, 1.5)), 3),
+                      redness=round(float(rng.uniform(0, 0.4)), 3), seed=int(rng.integers(0, 2 ** 31)))
+
+
+@dataclass
+class ScalpRegions:
+    vertices: np.ndarray     # (V, 3) head vertices, rest pose, y up
+    normals: np.ndarray
+    faces: np.ndarray        # (F, 3) into vertices
+    region: np.ndarray       # (V,) index into REGIONS, -1 for none (face, ears)
+    origin: np.ndarray       # head centre
+    up: np.ndarray
+    forward: np.ndarray
+    radii: np.ndarray        # head proxy ellipsoid semi-axes (right, up, forward)
+
+
+def scalp_regions_from_head(vertices, normals, faces, head_center, up, forward) -> ScalpRegions:
+    """Label head vertices by their direction from the head centre in the head frame."""
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    fwd = np.asarray(forward, float)
+    fwd = fwd - up * (fwd @ up)
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(up, fwd)
+    rel = np.asarray(vertices) - head_center
+    x, y, z = rel @ right, rel @ up, rel @ fwd
+    elev = np.degrees(np.arctan2(y, np.hypot(x, z)))
+    azim = np.degrees(np.arctan2(x, z))  # 0 forward, +-180 back
+    front = np.abs(azim) < 50
+    side = (np.abs(azim) >= 50) & (np.abs(azim) < 120)
+    back = np.abs(azim) >= 120
+    region = -np.ones(len(rel), np.int64)
+    region[front & (elev > 28)] = 0
+    region[elev > 55] = 1
+    region[side & (elev > 5) & (elev <= 55)] = 2
+    region[back & (elev > -5) & (elev <= 55)] = 3
+    region[back & (elev <= -5) & (elev > -40)] = 4
+    region[(np.abs(azim) < 75) & (elev < -20) & (elev > -75) & (z > 0)] = 5
+    radii = np.array([np.abs(x).max(), np.abs(y).max(), np.abs(z).max()]) * 0.93
+    return ScalpRegions(np.asarray(vertices, float), np.asarray(normals, float), np.asarray(faces), region,
+                        np.asarray(head_center, float), up, fwd, radii)
+
+
+@dataclass
+class Strands:
+    points: np.ndarray   # (N, K, 3) control points
+    radius: np.ndarray   # (N, K)
+    region: np.ndarray   # (N,)
+    kind: str = "bspline"
+
+    def transformed(self, R: np.ndarray, t: np.ndarray) -> "Strands":
+        return Strands(self.points @ R.T + t, self.radius, self.region, self.kind)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @staticmethod
+    def concat(parts: list["Strands"]) -> "Strands":
+        parts = [p for p in parts if len(p)]
+        if not parts:
+            return Strands(np.zeros((0, 6, 3)), np.zeros((0, 6)), np.zeros(0, np.int64))
+        return Strands(np.concatenate([p.points for p in parts]), np.concatenate([p.radius for p in parts]),
+                       np.concatenate([p.region for p in parts]))
+
+
+def _sample_roots(scalp: ScalpRegions, mask_faces: np.ndarray, n: int, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    f = scalp.faces[mask_faces]
+    tri = scalp.vertices[f]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    pick = rng.choice(len(f), n, p=area / area.sum())
+    a, b = rng.random(n), rng.random(n)
+    flip = a + b > 1
+    a[flip], b[flip] = 1 - a[flip], 1 - b[flip]
+    w = np.stack([1 - a - b, a, b], 1)
+    pts = np.einsum("nk,nka->na", w, tri[pick])
+    nrm = np.einsum("nk,nka->na", w, scalp.normals[f[pick]])
+    return pts, nrm / np.linalg.norm(nrm, axis=1, keepdims=True), pick
+
+
+def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float) -> np.ndarray:
+    """Push points out of the head proxy ellipsoid (grown by margin)."""
+    right = np.cross(scalp.up, scalp.forward)
+    B = np.stack([right, scalp.up, scalp.forward])
+    local = (p - scalp.origin) @ B.T
+    r = np.linalg.norm(local / (scalp.radii + margin), axis=-1, keepdims=True)
+    local = np.where(r < 1, local / np.maximum(r, 1e-9), local)
+    return local @ B + scalp.origin
+
+
+def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6) -> np.ndarray:
+    s = np.linspace(0, 1, k)[None, :, None]
+    out = normals * (0.3 + 0.7 * volume) + scalp.up * 0.2
+    down = -scalp.up
+    L = lengths[:, None, None]
+    # direction blends from outward to downward along the strand (gravity)
+    w = np.clip(gravity, -1, 1) * s ** 0.8
+    dirs = out[:, None] * (1 - np.abs(w)) + down[None, None] * w
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    steps = dirs * (L / (k - 1))
+    pts = roots[:, None] + np.concatenate([np.zeros_like(steps[:, :1]), np.cumsum(steps[:, 1:], axis=1)], 1)
+    if curl > 0:
+        phase = rng.uniform(0, 2 * np.pi, (len(roots), 1))
+        turns = 1 + 4 * curl
+        a = 2 * np.pi * turns * s[..., 0] + phase
+        side = np.cross(dirs, scalp.forward)
+        side /= np.maximum(np.linalg.norm(side, axis=-1, keepdims=True), 1e-9)
+        up2 = np.cross(dirs, side)
+        amp = (0.004 + 0.012 * curl) * np.minimum(1, L[..., 0] / 0.05)
+        pts = pts + amp[..., None] * (np.cos(a)[..., None] * side + np.sin(a)[..., None] * up2) * (s > 0)
+    pts[:, 0] = roots - normals * 0.002  # roots just under the scalp surface, visible from above
+    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.004).reshape(len(roots), k - 1, 3)
+    return pts
+
+
+def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
+    """Strands for the style and beard, deterministic from ``params.seed``."""
+    rng = np.random.default_rng(params.seed)
+    lengths = STYLES[params.style]
+    gravity, volume = lengths[5], lengths[6]
+    face_region = scalp.region[scalp.faces]
+    parts = []
+    n_total = int(800 + 2600 * params.density)
+    for r_idx in range(5):
+        L = lengths[r_idx] * params.length
+        mask = (face_region == r_idx).all(1)
+        if L <= 0 or not mask.any():
+            continue
+        n = max(20, int(n_total * mask.sum() / max(1, (face_region[:, 0] >= 0).sum())))
+        roots, normals, _ = _sample_roots(scalp, mask, n, rng)
+        lens = L * rng.uniform(0.85, 1.15, n)
+        pts = _grow(scalp, roots, normals, lens, gravity, volume, params.curliness, rng)
+        radius = np.linspace(0.0009, 0.0004, pts.shape[1])[None].repeat(n, 0) * (1 + volume)
+        parts.append(Strands(pts, radius, np.full(n, r_idx)))
+    L = BEARDS[params.beard]
+    mask = (face_region == 5).all(1)
+    if L > 0 and mask.any():
+        n = int(400 + 800 * params.density)
+        roots, normals, _ = _sample_roots(scalp, mask, n, rng)
+        if params.beard in ("goatee", "mustache"):  # keep a narrow band around the mouth
+            rel = roots - scalp.origin
+            x = rel @ np.cross(scalp.up, scalp.forward)
+            keep = np.abs(x) < (0.03 if params.beard == "goatee" else 0.035)
+            if params.beard == "mustache":
+                keep &= (rel @ scalp.up) > np.percentile(rel @ scalp.up, 60)
+            roots, normals = roots[keep], normals[keep]
+        if len(roots):
+            pts = _grow(scalp, roots, normals, L * rng.uniform(0.8, 1.2, len(roots)), 0.6, 0.2, params.curliness * 0.5, rng)
+            radius = np.full(pts.shape[:2], 0.0006)
+            parts.append(Strands(pts, radius, np.full(len(roots), 5)))
+    return Strands.concat(parts)
+
+
+def hair_material(params: HairParams):
+    from synmitsuba.scene.materials import Material
+    return Material(kind="hair", melanin=float(params.melanin), base_color=(0.3, 0.2, 0.1))
+
+
+def validate_style(name: str) -> None:
+    if name not in STYLES:
+        raise ConfigError("hair.style", name, f"use one of {', '.join(STYLES)}")

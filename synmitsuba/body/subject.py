@@ -1,0 +1,174 @@
+"""``LayeredHuman``: a built recipe — body, garments, hair, accessories — posed on the CPU by
+linear blend skinning and exported to a scene with one instance id and a layer id per layer."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.body import accessories as acc
+from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
+from synmitsuba.body.binding import bind
+from synmitsuba.body.garments import BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
+from synmitsuba.body.hair import Strands, grow_hair, hair_material, scalp_regions_from_head
+from synmitsuba.body.lbs import bone_transforms, skin
+from synmitsuba.body.recipe import SubjectRecipe
+from synmitsuba.body.textures import garment_material, lab_to_linear_rgb, skin_material
+from synmitsuba.body.topology import split_at_seams, vertex_normals
+from synmitsuba.errors import ConfigError
+from synmitsuba.scene.layers import Layer
+from synmitsuba.scene.materials import Material
+
+ORDER = {"shoes": 0, "shorts": 1, "trousers": 1, "skirt": 1, "tshirt": 2, "longsleeve": 2, "dress": 2, "jacket": 3}
+
+
+@dataclass
+class PosedLayer:
+    """One posed layer: a mesh (vertices, faces, uv) or curves (points, radius)."""
+
+    name: str
+    layer: int
+    material: Material
+    vertices: np.ndarray | None = None
+    faces: np.ndarray | None = None
+    uv: np.ndarray | None = None
+    points: np.ndarray | None = None
+    radius: np.ndarray | None = None
+
+    @property
+    def is_curves(self) -> bool:
+        return self.points is not None
+
+
+@dataclass
+class _Part:
+    name: str
+    layer: int
+    material: Material
+    rest: np.ndarray
+    faces: np.ndarray
+    uv: np.ndarray
+    weights: np.ndarray
+
+
+class LayeredHuman:
+    """Build with ``build_subject(recipe)``; pose with local rotations on ``skeleton``."""
+
+    def __init__(self, recipe: SubjectRecipe):
+        if recipe.model != "anny":
+            raise ConfigError("recipe.model", recipe.model, "layered subjects need the anny body; use "
+                              "synmitsuba.body.smplx_model.smplx_body for a bare SMPL-X body")
+        self.recipe = recipe
+        body = anny_body(recipe.phenotypes)
+        self.regions: BodyRegions = body_regions(body)
+        shoes = [g for g in recipe.garments if g.kind == "shoes"]
+        lift = garment_offset(shoes[0]) if shoes else 0.0  # the shoe soles stand on the ground
+        body.vertices = body.vertices + [0, lift, 0]
+        body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
+                                            body.skeleton.rest_positions + [0, lift, 0])
+        self.body: BodyMesh = body
+        self.split = split_at_seams(body.faces, body.face_uv, body.uv)
+        size = recipe.texture_size
+        self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin_material(recipe.skin, anny_uv_masks(2 * size), 2 * size),
+                                         body.vertices[self.split.source], self.split.faces, self.split.uv,
+                                         body.weights[self.split.source])]
+        self.garments: list[GarmentMesh] = []
+        below = 0.0
+        for g in sorted(recipe.garments, key=lambda g: ORDER[g.kind]):
+            m = build_garment(body, self.regions, self.split, g, below if g.kind != "shoes" else 0.0)
+            if g.kind != "shoes":
+                below = max(below, m.offset)
+            self.garments.append(m)
+            b = bind(body.vertices, body.faces, body.weights, m.vertices)
+            self.parts.append(_Part(g.kind, m.layer, garment_material(g.texture, size), m.vertices, m.faces, m.uv,
+                                    b.weights))
+        self._build_head_and_hair()
+        self._build_accessories()
+
+    # -- construction ---------------------------------------------------------------------
+    def _build_head_and_hair(self) -> None:
+        body, sk = self.body, self.body.skeleton
+        labels = part_labels(body)
+        head = labels == 1
+        hv = body.vertices[head]
+        centre = np.array([hv[:, 0].mean(), (hv[:, 1].max() + hv[:, 1].min()) / 2 + 0.02, hv[:, 2].mean()])
+        self.head = {"centre": centre, "up": np.array([0, 1.0, 0]), "forward": np.array([0, 0, 1.0]),
+                     "radii": np.ptp(hv, axis=0)[[0, 1, 2]] / 2}
+        idx = np.flatnonzero(head)
+        remap = -np.ones(len(body.vertices), np.int64)
+        remap[idx] = np.arange(len(idx))
+        f = remap[body.faces]
+        f = f[(f >= 0).all(1)]
+        normals = vertex_normals(body.vertices, body.faces)[idx]
+        scalp = scalp_regions_from_head(hv, normals, f, centre, [0, 1, 0], [0, 0, 1])
+        self.scalp = scalp
+        self.hair: Strands = grow_hair(self.recipe.hair, scalp)
+        self.head_bone = sk.index("head")
+
+    def _build_accessories(self) -> None:
+        from scipy.spatial import cKDTree
+        tree = cKDTree(self.body.vertices)
+        for i, p in enumerate(self.recipe.accessories):
+            v, f = acc.build_accessory(p, self.body, self.head)
+            _, near = tree.query(v)
+            colour = lab_to_linear_rgb(p.colour_lab) if p.colour_lab else (0.1, 0.1, 0.1)
+            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4,
+                           metallic=0.0 if p.kind != "watch" else 0.8)
+            self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, None, self.body.weights[near]))
+
+    # -- posing ---------------------------------------------------------------------------
+    @property
+    def skeleton(self):
+        return self.body.skeleton
+
+    def _transforms(self, rotations, root_translation):
+        if rotations is not None:
+            rotations = np.asarray(rotations, dtype=np.float64)
+            if rotations.shape != (len(self.skeleton), 3, 3):
+                raise ConfigError("rotations", f"array{rotations.shape}", f"expected ({len(self.skeleton)}, 3, 3)")
+        return bone_transforms(self.skeleton, rotations, root_translation)
+
+    def pose(self, rotations=None, root_translation=None) -> list[PosedLayer]:
+        """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,)."""
+        T = self._transforms(rotations, root_translation)
+        out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest, p.weights, T), p.faces, p.uv) for p in self.parts]
+        if len(self.hair):
+            A, b = T[0][self.head_bone], T[1][self.head_bone]
+            hair = self.hair.transformed(A, b)
+            scalp = hair.region < 5
+            if scalp.any():
+                out.append(PosedLayer("hair", int(Layer.HAIR), hair_material(self.recipe.hair),
+                                      points=hair.points[scalp], radius=hair.radius[scalp]))
+            if (~scalp).any():
+                out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair),
+                                      points=hair.points[~scalp], radius=hair.radius[~scalp]))
+        return out
+
+    def keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
+        """COCO-17 + 6 foot keypoints (23, 3), world metres, from anny's regressor."""
+        T = self._transforms(rotations, root_translation)
+        return self.body.keypoint_weights @ skin(self.body.vertices, self.body.weights, T)
+
+    def add_to(self, scene, rotations=None, root_translation=None, instance: int = 1, prefix: str | None = None):
+        """Add (or, when already there, move) every layer in ``scene`` as ``<prefix>_<layer>``."""
+        prefix = prefix or f"subject{instance}"
+        for layer in self.pose(rotations, root_translation):
+            name = f"{prefix}_{layer.name}"
+            if layer.is_curves:
+                if name in scene.curves:
+                    scene.remove(name)
+                scene.add_curves(name, layer.points, layer.radius, material=layer.material, instance=instance,
+                                 layer=layer.layer)
+            elif name in scene.meshes:
+                scene.update_mesh(name, layer.vertices)
+            else:
+                scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv, material=layer.material,
+                               instance=instance, layer=layer.layer)
+        return scene
+
+
+def build_subject(recipe: SubjectRecipe) -> LayeredHuman:
+    """Build the layered human a recipe describes (deterministic)."""
+    if not isinstance(recipe, SubjectRecipe):
+        raise ConfigError("recipe", type(recipe).__name__, "give a SubjectRecipe (sample_subject or from_json)")
+    return LayeredHuman(recipe)

@@ -1,0 +1,304 @@
+"""Procedural textures: garments (base colour + pattern + decal + bump, UV mapping) and skin.
+
+Colours are sampled in CIELAB (perceptual) and converted with colour-science to linear sRGB.
+Skin tone is sampled by ITA (individual typology angle, ITA = atan((L* - 50) / b*)) from
+-60 deg (very dark) to 65 deg (very light), the range of the six Fitzpatrick-like ITA
+classes, with L* following ITA and a hue between red and yellow. All rendering is
+deterministic in the parameters (noise is seeded by a seed stored in them).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+
+import numpy as np
+
+from synmitsuba._colour import import_colour
+from synmitsuba.errors import ConfigError
+
+PATTERNS = ("none", "stripes", "checks", "plaid", "dots", "camouflage", "gradient")
+DECALS = ("none", "circle", "star", "band", "number")
+BUMPS = ("none", "knit", "ribbed", "noise", "denim")
+ITA_RANGE = (-60.0, 65.0)
+
+
+def lab_to_linear_rgb(lab) -> np.ndarray:
+    colour = import_colour()
+    xyz = colour.Lab_to_XYZ(np.asarray(lab, dtype=np.float64))
+    rgb = colour.XYZ_to_RGB(xyz, "sRGB", apply_cctf_encoding=False)
+    return np.clip(rgb, 0.0, 1.0)
+
+
+def linear_rgb_to_lab(rgb) -> np.ndarray:
+    colour = import_colour()
+    return colour.XYZ_to_Lab(colour.RGB_to_XYZ(np.asarray(rgb, dtype=np.float64), "sRGB", apply_cctf_decoding=False))
+
+
+def sample_lab_colour(rng: np.random.Generator, l_range=(20, 85), chroma=(5, 70)) -> list[float]:
+    L = rng.uniform(*l_range)
+    c = rng.uniform(*chroma)
+    h = rng.uniform(0, 2 * np.pi)
+    return [round(float(L), 3), round(float(c * np.cos(h)), 3), round(float(c * np.sin(h)), 3)]
+
+
+def _from_dict(cls, d: dict, where: str):
+    names = {f.name for f in fields(cls)}
+    for k in d:
+        if k not in names:
+            raise ConfigError(f"{where}.{k}", d[k], f"unknown field; fields: {', '.join(sorted(names))}")
+    obj = cls(**d)
+    obj.validate(where)
+    return obj
+
+
+def _check(where: str, name: str, value, low=None, high=None, choices=None):
+    if choices is not None:
+        if value not in choices:
+            raise ConfigError(f"{where}.{name}", value, f"use one of {', '.join(choices)}")
+        return
+    if not isinstance(value, (int, float)) or not low <= value <= high:
+        raise ConfigError(f"{where}.{name}", value, f"give a number in [{low}, {high}]")
+
+
+def _check_lab(where: str, name: str, value):
+    if not (isinstance(value, (list, tuple)) and len(value) == 3 and 0 <= value[0] <= 100
+            and all(isinstance(x, (int, float)) and -128 <= x <= 128 for x in value)):
+        raise ConfigError(f"{where}.{name}", value, "give a CIELAB colour [L* in 0..100, a*, b* in -128..128]")
+
+
+@dataclass
+class GarmentTextureParams:
+    base_lab: list = field(default_factory=lambda: [50.0, 0.0, 0.0])
+    pattern: str = "none"
+    pattern_lab: list = field(default_factory=lambda: [20.0, 0.0, 0.0])
+    pattern_scale: float = 8.0      # repeats across the UV square
+    pattern_width: float = 0.3      # fraction of a period covered by the pattern colour
+    pattern_alpha: float = 1.0
+    decal: str = "none"
+    decal_lab: list = field(default_factory=lambda: [90.0, 0.0, 0.0])
+    decal_center: list = field(default_factory=lambda: [0.5, 0.5])
+    decal_size: float = 0.15
+    bump: str = "none"
+    bump_amplitude: float = 0.5
+    bump_scale: float = 40.0
+    uv_scale: float = 1.0
+    uv_rotation_deg: float = 0.0
+    uv_offset: list = field(default_factory=lambda: [0.0, 0.0])
+    seed: int = 0
+
+    def validate(self, where: str = "texture") -> None:
+        _check_lab(where, "base_lab", self.base_lab)
+        _check_lab(where, "pattern_lab", self.pattern_lab)
+        _check_lab(where, "decal_lab", self.decal_lab)
+        _check(where, "pattern", self.pattern, choices=PATTERNS)
+        _check(where, "decal", self.decal, choices=DECALS)
+        _check(where, "bump", self.bump, choices=BUMPS)
+        _check(where, "pattern_scale", self.pattern_scale, 1, 64)
+        _check(where, "pattern_width", self.pattern_width, 0.05, 0.95)
+        _check(where, "pattern_alpha", self.pattern_alpha, 0, 1)
+        _check(where, "decal_size", self.decal_size, 0.02, 0.5)
+        _check(where, "bump_amplitude", self.bump_amplitude, 0, 1)
+        _check(where, "bump_scale", self.bump_scale, 2, 200)
+        _check(where, "uv_scale", self.uv_scale, 0.1, 10)
+        _check(where, "uv_rotation_deg", self.uv_rotation_deg, -180, 180)
+        _check(where, "seed", self.seed, 0, 2 ** 31)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "texture") -> "GarmentTextureParams":
+        return _from_dict(cls, d, where)
+
+
+def sample_garment_texture(rng: np.random.Generator) -> GarmentTextureParams:
+    base = sample_lab_colour(rng)
+    contrast = sample_lab_colour(rng)
+    return GarmentTextureParams(
+        base_lab=base, pattern=str(rng.choice(PATTERNS, p=[0.3, 0.15, 0.1, 0.1, 0.1, 0.1, 0.15])),
+        pattern_lab=contrast, pattern_scale=round(float(rng.uniform(3, 24)), 3),
+        pattern_width=round(float(rng.uniform(0.15, 0.6)), 3), pattern_alpha=round(float(rng.uniform(0.6, 1.0)), 3),
+        decal=str(rng.choice(DECALS, p=[0.5, 0.15, 0.15, 0.1, 0.1])), decal_lab=sample_lab_colour(rng, (10, 95)),
+        decal_center=[round(float(x), 3) for x in rng.uniform(0.2, 0.8, 2)],
+        decal_size=round(float(rng.uniform(0.05, 0.2)), 3), bump=str(rng.choice(BUMPS)),
+        bump_amplitude=round(float(rng.uniform(0.2, 1.0)), 3), bump_scale=round(float(rng.uniform(20, 120)), 3),
+        uv_scale=round(float(rng.uniform(0.7, 2.0)), 3), uv_rotation_deg=round(float(rng.uniform(-45, 45)), 3),
+        uv_offset=[round(float(x), 3) for x in rng.uniform(0, 1, 2)], seed=int(rng.integers(0, 2 ** 31)))
+
+
+def _uv_grid(p: GarmentTextureParams, size: int):
+    v, u = (np.mgrid[:size, :size] + 0.5) / size
+    v = 1 - v  # row 0 is the top of the texture (v = 1)
+    a = np.radians(p.uv_rotation_deg)
+    x = (np.cos(a) * u - np.sin(a) * v) * p.uv_scale + p.uv_offset[0]
+    y = (np.sin(a) * u + np.cos(a) * v) * p.uv_scale + p.uv_offset[1]
+    return x, y
+
+
+def _value_noise(x, y, seed: int, octaves: int = 3) -> np.ndarray:
+    """Smooth periodic value noise in [0, 1] (period 1 in uv)."""
+    rng = np.random.default_rng(seed)
+    out = np.zeros_like(x)
+    total = 0.0
+    for o in range(octaves):
+        n = 4 * 2 ** o
+        grid = rng.random((n, n))
+        gx, gy = (x * n) % n, (y * n) % n
+        x0, y0 = np.floor(gx).astype(int), np.floor(gy).astype(int)
+        fx, fy = gx - x0, gy - y0
+        fx, fy = fx * fx * (3 - 2 * fx), fy * fy * (3 - 2 * fy)
+        x1, y1 = (x0 + 1) % n, (y0 + 1) % n
+        val = (grid[y0, x0] * (1 - fx) + grid[y0, x1] * fx) * (1 - fy) + (grid[y1, x0] * (1 - fx) + grid[y1, x1] * fx) * fy
+        out += val / 2 ** o
+        total += 1 / 2 ** o
+    return out / total
+
+
+def _pattern_mask(p: GarmentTextureParams, x, y) -> np.ndarray:
+    s, w = p.pattern_scale, p.pattern_width
+    fx, fy = (x * s) % 1.0, (y * s) % 1.0
+    if p.pattern == "stripes":
+        return (fy < w).astype(np.float64)
+    if p.pattern == "checks":
+        return ((np.floor(x * s) + np.floor(y * s)) % 2).astype(np.float64)
+    if p.pattern == "plaid":
+        return 0.5 * (fx < w) + 0.5 * (fy < w) + 0.0 * fx
+    if p.pattern == "dots":
+        return (((fx - 0.5) ** 2 + (fy - 0.5) ** 2) < (0.5 * w) ** 2).astype(np.float64)
+    if p.pattern == "camouflage":
+        n = _value_noise(x * s / 8, y * s / 8, p.seed)
+        return (n > 0.5 + 0.3 * (w - 0.5)).astype(np.float64)
+    if p.pattern == "gradient":
+        return np.clip(y % 1.0, 0, 1)
+    return np.zeros_like(x)
+
+
+def _decal_mask(p: GarmentTextureParams, size: int) -> np.ndarray:
+    v, u = (np.mgrid[:size, :size] + 0.5) / size
+    v = 1 - v
+    dx, dy = (u - p.decal_center[0]) / p.decal_size, (v - p.decal_center[1]) / p.decal_size
+    r, ang = np.hypot(dx, dy), np.arctan2(dy, dx)
+    if p.decal == "circle":
+        return ((r < 1.0) & (r > 0.6)).astype(np.float64) + (r < 0.35)
+    if p.decal == "star":
+        return (r < 0.55 + 0.45 * np.cos(5 * ang)).astype(np.float64) * (r < 1.0)
+    if p.decal == "band":
+        return (np.abs(dy) < 0.3).astype(np.float64)
+    if p.decal == "number":  # a blocky numeral-like glyph: two bars and a stem
+        return (((np.abs(dy - 0.6) < 0.15) | (np.abs(dy + 0.6) < 0.15)) & (np.abs(dx) < 0.5)
+                | ((np.abs(dx - 0.35) < 0.15) & (np.abs(dy) < 0.75))).astype(np.float64)
+    return np.zeros((size, size))
+
+
+def _height(p: GarmentTextureParams, x, y) -> np.ndarray:
+    s = p.bump_scale
+    if p.bump == "knit":
+        h = np.abs(np.sin(np.pi * x * s)) * (0.5 + 0.5 * np.cos(2 * np.pi * y * s * 2))
+    elif p.bump == "ribbed":
+        h = 0.5 + 0.5 * np.sin(2 * np.pi * x * s)
+    elif p.bump == "noise":
+        h = _value_noise(x * s / 16, y * s / 16, p.seed + 1, octaves=4)
+    elif p.bump == "denim":
+        h = 0.5 + 0.5 * np.sin(2 * np.pi * (x + y) * s)
+    else:
+        return np.zeros_like(x)
+    return p.bump_amplitude * (h - h.mean())
+
+
+def render_garment_texture(p: GarmentTextureParams, size: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """(albedo (size, size, 3) float32 linear in [0, 1], height (size, size) float32)."""
+    x, y = _uv_grid(p, size)
+    base = lab_to_linear_rgb(p.base_lab)
+    img = np.broadcast_to(base, (size, size, 3)).copy()
+    m = np.clip(_pattern_mask(p, x, y), 0, 1)[..., None] * p.pattern_alpha
+    img = img * (1 - m) + lab_to_linear_rgb(p.pattern_lab) * m
+    d = np.clip(_decal_mask(p, size), 0, 1)[..., None]
+    img = img * (1 - d) + lab_to_linear_rgb(p.decal_lab) * d
+    return img.astype(np.float32), _height(p, x, y).astype(np.float32)
+
+
+def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float = 0.8):
+    from synmitsuba.scene.materials import Material
+    albedo, height = render_garment_texture(p, size)
+    return Material(texture=albedo, bump=height if p.bump != "none" else None, bump_scale=0.002,
+                    kind="principled", roughness=roughness, specular=0.3)
+
+
+# -- skin ------------------------------------------------------------------------------
+@dataclass
+class SkinParams:
+    ita_deg: float = 30.0         # individual typology angle: 65 very light .. -60 very dark
+    hue_deg: float = 55.0         # angle of (a*, b*): 35 reddish .. 75 yellowish
+    lip_darkening: float = 0.25   # 0..1
+    lip_redness: float = 0.4
+    freckles: float = 0.0         # density 0..1 (face only)
+    blush: float = 0.1            # 0..1 (cheeks)
+    nail_lightening: float = 0.3
+    seed: int = 0
+
+    def validate(self, where: str = "skin") -> None:
+        _check(where, "ita_deg", self.ita_deg, *ITA_RANGE)
+        _check(where, "hue_deg", self.hue_deg, 20, 90)
+        for name in ("lip_darkening", "lip_redness", "freckles", "blush", "nail_lightening"):
+            _check(where, name, getattr(self, name), 0, 1)
+        _check(where, "seed", self.seed, 0, 2 ** 31)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "skin") -> "SkinParams":
+        return _from_dict(cls, d, where)
+
+    def lab(self) -> np.ndarray:
+        """CIELAB skin tone: L* from ITA along a measured-skin trend, b* so that ITA holds."""
+        ita = np.radians(self.ita_deg)
+        L = 50 + 40 * np.sin(ita) / (1 + 0.2 * abs(np.sin(ita)))  # about 22 (ITA -60) .. 80 (ITA 65)
+        b = (L - 50) / np.tan(ita) if abs(np.tan(ita)) > 1e-3 else 20.0
+        b = float(np.clip(abs(b), 8, 30))
+        L = 50 + b * np.tan(ita)  # make ITA exact for the chosen b*
+        a = b / np.tan(np.radians(self.hue_deg))
+        return np.array([L, a, b])
+
+
+def sample_skin(rng: np.random.Generator) -> SkinParams:
+    return SkinParams(ita_deg=round(float(rng.uniform(*ITA_RANGE)), 3), hue_deg=round(float(rng.uniform(40, 70)), 3),
+                      lip_darkening=round(float(rng.uniform(0.1, 0.4)), 3), lip_redness=round(float(rng.uniform(0.2, 0.7)), 3),
+                      freckles=round(float(rng.choice([0.0, rng.uniform(0, 1)], p=[0.7, 0.3])), 3),
+                      blush=round(float(rng.uniform(0, 0.4)), 3), nail_lightening=round(float(rng.uniform(0.1, 0.5)), 3),
+                      seed=int(rng.integers(0, 2 ** 31)))
+
+
+def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
+    """Skin albedo (size, size, 3) linear: the tone, darker/redder lips, lighter nails, and
+    freckles and blush inside the face mask. Missing masks skip their layer."""
+    lab = p.lab()
+    img = np.broadcast_to(lab_to_linear_rgb(lab), (size, size, 3)).copy()
+
+    def blend(mask, target_lab):
+        m = np.clip(mask, 0, 1)[..., None]
+        return img * (1 - m) + lab_to_linear_rgb(target_lab) * m
+
+    if "lips" in masks:
+        lips = lab + [-20 * p.lip_darkening, 25 * p.lip_redness, 0]
+        img = blend(masks["lips"], lips)
+    if "face" in masks and (p.blush > 0 or p.freckles > 0):
+        v, u = (np.mgrid[:size, :size] + 0.5) / size
+        noise = _value_noise(u * 6, v * 6, p.seed, octaves=2)
+        img = blend(masks["face"] * p.blush * 0.5 * noise, lab + [-5, 18, 2])
+        rng = np.random.default_rng(p.seed)
+        spots = np.zeros((size, size))
+        n = int(2000 * p.freckles)
+        if n:
+            ys, xs = rng.integers(0, size, n), rng.integers(0, size, n)
+            spots[ys, xs] = 1.0
+            spots = np.maximum(spots, np.roll(spots, 1, 0))
+        img = blend(spots * masks["face"] * 0.6, lab + [-18, 6, 10])
+    for key in ("nails", "toenails"):
+        if key in masks:
+            img = blend(masks[key] * p.nail_lightening, lab + [15, -5, -5])
+    return img.astype(np.float32)
+
+
+def skin_material(p: SkinParams, masks: dict, size: int = 512):
+    from synmitsuba.scene.materials import Material
+    return Material(texture=render_skin_texture(p, masks, size), kind="principled", roughness=0.55, specular=0.35)
