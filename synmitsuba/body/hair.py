@@ -95,9 +95,9 @@ def scalp_regions_from_head(vertices, normals, faces, head_center, up, forward) 
     back = np.abs(azim) >= 120
     region = -np.ones(len(rel), np.int64)
     region[front & (elev > 28)] = 0
-    region[elev > 55] = 1
-    region[side & (elev > 5) & (elev <= 55)] = 2
-    region[back & (elev > -5) & (elev <= 55)] = 3
+    region[elev > 45] = 1
+    region[side & (elev > 5) & (elev <= 45)] = 2
+    region[back & (elev > -5) & (elev <= 45)] = 3
     region[back & (elev <= -5) & (elev > -40)] = 4
     region[(np.abs(azim) < 75) & (elev < -20) & (elev > -75) & (z > 0)] = 5
     radii = np.array([np.abs(x).max(), np.abs(y).max(), np.abs(z).max()]) * 0.93
@@ -141,38 +141,56 @@ def _sample_roots(scalp: ScalpRegions, mask_faces: np.ndarray, n: int, rng) -> t
     return pts, nrm / np.linalg.norm(nrm, axis=1, keepdims=True), pick
 
 
-def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float) -> np.ndarray:
-    """Push points out of the head proxy ellipsoid (grown by margin)."""
+def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float, hug: float | None = None) -> np.ndarray:
+    """Push points out of the head proxy ellipsoid (grown by ``margin``); with ``hug``, points
+    above the ears are also pulled onto the shell at most ``hug`` (relative) above it."""
     right = np.cross(scalp.up, scalp.forward)
     B = np.stack([right, scalp.up, scalp.forward])
     local = (p - scalp.origin) @ B.T
     r = np.linalg.norm(local / (scalp.radii + margin), axis=-1, keepdims=True)
-    local = np.where(r < 1, local / np.maximum(r, 1e-9), local)
+    target = np.maximum(r, 1.0)
+    if hug is not None:
+        above = local[:, 1:2] > -0.2 * scalp.radii[1]
+        target = np.where(above, np.minimum(target, 1.0 + hug), target)
+    local = local / np.maximum(r, 1e-9) * target
     return local @ B + scalp.origin
 
 
-def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6) -> np.ndarray:
-    s = np.linspace(0, 1, k)[None, :, None]
-    out = normals * (0.3 + 0.7 * volume) + scalp.up * 0.2
+def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6, comb=None) -> np.ndarray:
+    """Strands that leave the scalp along it (combed towards ``comb``, default down and back),
+    lift off it by ``volume`` and bend down with ``gravity``, staying outside the head."""
     down = -scalp.up
-    L = lengths[:, None, None]
-    # direction blends from outward to downward along the strand (gravity)
-    w = np.clip(gravity, -1, 1) * s ** 0.8
-    dirs = out[:, None] * (1 - np.abs(w)) + down[None, None] * w
-    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
-    steps = dirs * (L / (k - 1))
-    pts = roots[:, None] + np.concatenate([np.zeros_like(steps[:, :1]), np.cumsum(steps[:, 1:], axis=1)], 1)
+    if comb is None:  # fall away from the crown, parted away from the face
+        radial = roots - scalp.origin
+        radial -= np.outer(radial @ scalp.up, scalp.up)
+        radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+        front = np.clip(radial @ scalp.forward, 0, None)[:, None]
+        radial = radial - front * scalp.forward * 1.2
+        comb = radial + 0.5 * down
+    else:
+        comb = np.broadcast_to(comb, roots.shape)
+    tangent = comb - normals * (normals * comb).sum(1, keepdims=True)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-9)
+    seg = lengths[:, None] / (k - 1)
+    pts = np.empty((len(roots), k, 3))
+    pts[:, 0] = roots
+    lift = 0.05 + 0.3 * volume
+    for j in range(1, k):
+        s = j / (k - 1)
+        g = np.clip(gravity, -1, 1) * s
+        d = tangent * (1 - abs(g)) + normals * lift * (1 - s) + down * max(g, 0) + normals * max(-g, 0)
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        pts[:, j] = pts[:, j - 1] + d * seg
     if curl > 0:
+        s = np.linspace(0, 1, k)[None, :]
         phase = rng.uniform(0, 2 * np.pi, (len(roots), 1))
-        turns = 1 + 4 * curl
-        a = 2 * np.pi * turns * s[..., 0] + phase
-        side = np.cross(dirs, scalp.forward)
-        side /= np.maximum(np.linalg.norm(side, axis=-1, keepdims=True), 1e-9)
-        up2 = np.cross(dirs, side)
-        amp = (0.004 + 0.012 * curl) * np.minimum(1, L[..., 0] / 0.05)
-        pts = pts + amp[..., None] * (np.cos(a)[..., None] * side + np.sin(a)[..., None] * up2) * (s > 0)
-    pts[:, 0] = roots - normals * 0.002  # roots just under the scalp surface, visible from above
-    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.004).reshape(len(roots), k - 1, 3)
+        a = 2 * np.pi * (1 + 4 * curl) * s + phase
+        side = np.cross(tangent, normals)
+        amp = ((0.003 + 0.01 * curl) * np.minimum(1, lengths / 0.05))[:, None, None] * (s[..., None] > 0)
+        pts = pts + amp * (np.cos(a)[..., None] * side[:, None] + np.sin(a)[..., None] * normals[:, None])
+    pts[:, 0] = roots - normals * 0.002  # roots just under the scalp surface
+    hug = None if volume >= 0.9 else 0.05 + 0.25 * volume
+    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.003, hug).reshape(len(roots), k - 1, 3)
     return pts
 
 
@@ -182,18 +200,22 @@ def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
     lengths = STYLES[params.style]
     gravity, volume = lengths[5], lengths[6]
     face_region = scalp.region[scalp.faces]
+    tri = scalp.vertices[scalp.faces]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    scalp_area = area[(face_region[:, 0] >= 0) & (face_region[:, 0] < 5) & (face_region == face_region[:, :1]).all(1)].sum()
     parts = []
-    n_total = int(800 + 2600 * params.density)
+    n_total = int(1500 + 3500 * params.density)
     for r_idx in range(5):
         L = lengths[r_idx] * params.length
         mask = (face_region == r_idx).all(1)
         if L <= 0 or not mask.any():
             continue
-        n = max(20, int(n_total * mask.sum() / max(1, (face_region[:, 0] >= 0).sum())))
+        n = max(20, int(n_total * area[mask].sum() / max(scalp_area, 1e-9)))
         roots, normals, _ = _sample_roots(scalp, mask, n, rng)
         lens = L * rng.uniform(0.85, 1.15, n)
-        pts = _grow(scalp, roots, normals, lens, gravity, volume, params.curliness, rng)
-        radius = np.linspace(0.0009, 0.0004, pts.shape[1])[None].repeat(n, 0) * (1 + volume)
+        comb = scalp.forward * 0.8 - scalp.up if (r_idx == 0 and params.style == "fringe") else None
+        pts = _grow(scalp, roots, normals, lens, gravity, volume, params.curliness, rng, comb=comb)
+        radius = np.linspace(0.0016, 0.0008, pts.shape[1])[None].repeat(n, 0) * (1 + 0.5 * volume)
         parts.append(Strands(pts, radius, np.full(n, r_idx)))
     L = BEARDS[params.beard]
     mask = (face_region == 5).all(1)
@@ -208,8 +230,9 @@ def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
                 keep &= (rel @ scalp.up) > np.percentile(rel @ scalp.up, 60)
             roots, normals = roots[keep], normals[keep]
         if len(roots):
-            pts = _grow(scalp, roots, normals, L * rng.uniform(0.8, 1.2, len(roots)), 0.6, 0.2, params.curliness * 0.5, rng)
-            radius = np.full(pts.shape[:2], 0.0006)
+            pts = _grow(scalp, roots, normals, L * rng.uniform(0.8, 1.2, len(roots)), 0.6, 0.2, params.curliness * 0.5,
+                        rng, comb=-scalp.up)
+            radius = np.full(pts.shape[:2], 0.0009)
             parts.append(Strands(pts, radius, np.full(len(roots), 5)))
     return Strands.concat(parts)
 

@@ -91,9 +91,11 @@ class LayeredHuman:
         labels = part_labels(body)
         head = labels == 1
         hv = body.vertices[head]
-        centre = np.array([hv[:, 0].mean(), (hv[:, 1].max() + hv[:, 1].min()) / 2 + 0.02, hv[:, 2].mean()])
+        skull = hv[hv[:, 1] > sk.rest_positions[sk.index("head"), 1]]  # above the skull base
+        lo, hi = skull.min(0), skull.max(0)
+        centre = np.array([(lo[0] + hi[0]) / 2, lo[1] + 0.45 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2])
         self.head = {"centre": centre, "up": np.array([0, 1.0, 0]), "forward": np.array([0, 0, 1.0]),
-                     "radii": np.ptp(hv, axis=0)[[0, 1, 2]] / 2}
+                     "radii": (hi - lo) / 2}
         idx = np.flatnonzero(head)
         remap = -np.ones(len(body.vertices), np.int64)
         remap[idx] = np.arange(len(idx))
