@@ -1,0 +1,269 @@
+"""Layered humans: recipes, garments, skinning, hair, accessories, textures, the smplx backend."""
+import json
+
+import numpy as np
+import pytest
+
+import synmitsuba as sm
+from synmitsuba.body.binding import bound_points, signed_distance
+from synmitsuba.body.lbs import bone_transforms, skin
+from synmitsuba.errors import ConfigError
+from synmitsuba.motion.rotations import axis_rotation
+
+
+@pytest.fixture(scope="module")
+def human():
+    recipe = sm.sample_subject(np.random.default_rng(11), {"outfit": ["tshirt", "trousers"], "jacket": True,
+                                                           "shoes": True, "hair_style": "bob",
+                                                           "accessories": ["glasses", "watch", "backpack"]})
+    return sm.build_subject(recipe)
+
+
+def strong_poses(sk):
+    """Arms raised, a deep knee bend, a torso twist, a forward bend."""
+    poses = []
+    R = np.broadcast_to(np.eye(3), (len(sk), 3, 3)).copy()
+    arms = R.copy()
+    arms[sk.index("upperarm01.L")] = axis_rotation("z", np.radians(100))
+    arms[sk.index("upperarm01.R")] = axis_rotation("z", np.radians(-100))
+    arms[sk.index("lowerarm01.L")] = axis_rotation("y", np.radians(-90))
+    poses.append(arms)
+    knees = R.copy()
+    for s in "LR":
+        knees[sk.index(f"upperleg01.{s}")] = axis_rotation("x", np.radians(-80))
+        knees[sk.index(f"lowerleg01.{s}")] = axis_rotation("x", np.radians(90))
+    poses.append(knees)
+    twist = R.copy()
+    twist[sk.index("spine03")] = axis_rotation("y", np.radians(35))
+    twist[sk.index("spine01")] = axis_rotation("x", np.radians(30))
+    poses.append(twist)
+    return poses
+
+
+def test_recipe_json_round_trip_and_byte_identical_rebuild(human):
+    text = human.recipe.to_json()
+    again = sm.SubjectRecipe.from_json(text)
+    assert again.to_json() == text
+    other = sm.build_subject(again)
+    for a, b in zip(human.pose(), other.pose()):
+        assert a.name == b.name
+        for field in ("vertices", "faces", "uv", "points", "radius"):
+            x, y = getattr(a, field), getattr(b, field)
+            assert (x is None and y is None) or x.tobytes() == y.tobytes(), (a.name, field)
+        if a.material.texture is not None:
+            assert a.material.texture.tobytes() == b.material.texture.tobytes()
+
+
+def test_sampling_is_deterministic_and_varied():
+    a = [sm.sample_subject(np.random.default_rng(s)).to_json() for s in range(6)]
+    b = [sm.sample_subject(np.random.default_rng(s)).to_json() for s in range(6)]
+    assert a == b and len(set(a)) == 6
+
+
+@pytest.mark.parametrize("patch,field", [
+    ({"phenotypes": {"height": 1.5}}, "recipe.phenotypes.height"),
+    ({"phenotypes": {"wingspan": 0.5}}, "recipe.phenotypes.wingspan"),
+    ({"hair": {"style": "mohawk"}}, "recipe.hair.style"),
+    ({"colour": "red"}, "recipe.colour"),
+    ({"garments": [{"kind": "tshirt", "ease": 0.5}]}, "recipe.garments[0].ease"),
+    ({"garments": [{"kind": "cape"}]}, "recipe.garments[0].kind"),
+    ({"garments": [{"kind": "tshirt", "texture": {"pattern": "paisley"}}]}, "recipe.garments[0].texture.pattern"),
+    ({"skin": {"ita_deg": 90}}, "recipe.skin.ita_deg"),
+])
+def test_bad_recipe_fields_are_named(patch, field):
+    d = sm.sample_subject(np.random.default_rng(0)).to_dict()
+    d.update(patch)
+    with pytest.raises(ConfigError) as e:
+        sm.SubjectRecipe.from_dict(d)
+    assert field in str(e.value)
+
+
+def test_no_garment_vertex_inside_the_body_at_rest_and_layers_nest(human):
+    body = human.body
+    dist = {}
+    for g in human.garments:
+        d = signed_distance(body.vertices, body.faces, g.vertices)
+        assert d.min() > 0, g.params.kind
+        dist[g.params.kind] = np.median(d)
+    assert dist["trousers"] < dist["tshirt"] < dist["jacket"]
+
+
+def test_garments_follow_strong_poses(human, record_property):
+    sk = human.skeleton
+    body = human.body
+    shares = []
+    for R in strong_poses(sk):
+        T = bone_transforms(sk, R)
+        posed_body = skin(body.vertices, body.weights, T)
+        for part, g in zip([p for p in human.parts if p.name in {g.params.kind for g in human.garments}], human.garments):
+            posed = skin(part.rest, part.weights, T)
+            shares.append((signed_distance(posed_body, body.faces, posed) < -0.003).mean())
+    record_property("penetrating_share_max", max(shares))
+    assert max(shares) < 0.08  # small and bounded: skinning without simulation
+
+
+def test_skinning_keeps_garment_vertices_near_their_bound_points(human):
+    from synmitsuba.body.binding import bind
+    body, sk = human.body, human.skeleton
+    g = next(g for g in human.garments if g.params.kind == "tshirt")
+    b = bind(body.vertices, body.faces, body.weights, g.vertices)
+    rest_gap = np.linalg.norm(g.vertices - bound_points(b, body.vertices, body.faces), axis=1)
+    for R in strong_poses(sk):
+        T = bone_transforms(sk, R)
+        posed_body = skin(body.vertices, body.weights, T)
+        gap = np.linalg.norm(skin(g.vertices, b.weights, T) - bound_points(b, posed_body, body.faces), axis=1)
+        assert np.percentile(gap - rest_gap, 99) < 0.02 and gap.max() < 0.08
+
+
+def test_hair_roots_lie_on_the_scalp_in_their_regions(human):
+    from synmitsuba.body.hair import HairParams, grow_hair
+    scalp = human.scalp
+    roots = human.hair.points[:, 0]
+    tri = scalp.faces
+    d = np.abs(signed_distance(scalp.vertices, tri, roots))
+    assert np.percentile(d, 99) < 0.003
+    from scipy.spatial import cKDTree
+    _, near = cKDTree(scalp.vertices).query(roots)
+    assert (scalp.region[near] == human.hair.region).mean() > 0.9
+    from synmitsuba.body.hair import BEARDS, STYLES
+    counts = {}
+    for style in STYLES:
+        for beard in BEARDS:
+            s = grow_hair(HairParams(style=style, beard=beard, seed=1), scalp)
+            counts[(style, beard)] = len(s)
+            assert np.isfinite(s.points).all()
+    assert counts[("bald", "none")] == 0
+    assert all(counts[(st, "none")] > 500 for st in STYLES if st != "bald")
+    assert counts[("bald", "full")] > 0
+
+
+def test_hair_and_accessories_follow_the_head(human):
+    sk = human.skeleton
+    R = np.broadcast_to(np.eye(3), (len(sk), 3, 3)).copy()
+    R[sk.index("neck01")] = axis_rotation("y", np.radians(60))
+    rest = {p.name: p for p in human.pose()}
+    turned = {p.name: p for p in human.pose(R)}
+    head = sk.rest_positions[sk.index("neck01")]  # the turn is about the neck joint
+    for name in ("hair", "glasses"):
+        a = rest[name].points if rest[name].is_curves else rest[name].vertices
+        b = turned[name].points if turned[name].is_curves else turned[name].vertices
+        a, b = a.reshape(-1, 3) - head, b.reshape(-1, 3) - head
+        ang = np.degrees(np.arctan2(b[:, 0], b[:, 2]) - np.arctan2(a[:, 0], a[:, 2]))
+        ang = (ang + 180) % 360 - 180
+        far = np.hypot(a[:, 0], a[:, 2]) > 0.05
+        assert abs(np.median(ang[far]) - 60) < 8, name
+    assert np.allclose(rest["watch"].vertices, turned["watch"].vertices)
+
+
+def test_every_texture_parameter_changes_the_texture():
+    from synmitsuba.body.textures import GarmentTextureParams, render_garment_texture
+    base = GarmentTextureParams(pattern="stripes", decal="star", bump="knit", seed=3)
+    a0, h0 = render_garment_texture(base, 64)
+    changes = {"base_lab": [70.0, 20.0, -30.0], "pattern": "dots", "pattern_lab": [80.0, 40.0, 0.0], "pattern_scale": 12.0,
+               "pattern_width": 0.6, "pattern_alpha": 0.5, "decal": "circle", "decal_lab": [20.0, 0.0, 40.0],
+               "decal_center": [0.3, 0.6], "decal_size": 0.3, "bump": "ribbed", "bump_amplitude": 0.9,
+               "bump_scale": 80.0, "uv_scale": 1.7, "uv_rotation_deg": 30.0, "uv_offset": [0.25, 0.1]}
+    for key, value in changes.items():
+        a, h = render_garment_texture(GarmentTextureParams(**{**base.to_dict(), key: value}), 64)
+        assert not (np.array_equal(a, a0) and np.array_equal(h, h0)), key
+    cam = GarmentTextureParams(pattern="camouflage", seed=1)
+    assert not np.array_equal(render_garment_texture(cam, 64)[0],
+                              render_garment_texture(GarmentTextureParams(**{**cam.to_dict(), "seed": 2}), 64)[0])
+
+
+def test_skin_tones_span_light_to_dark_by_ita():
+    from synmitsuba._colour import import_colour
+    from synmitsuba.body.textures import ITA_RANGE, SkinParams, render_skin_texture
+    colour = import_colour()
+    L = []
+    for ita in (ITA_RANGE[0], -30, 0, 30, ITA_RANGE[1]):
+        albedo = render_skin_texture(SkinParams(ita_deg=ita, freckles=0, blush=0), {}, 8)[0, 0]
+        lab = colour.XYZ_to_Lab(colour.RGB_to_XYZ(albedo.astype(float), "sRGB", apply_cctf_decoding=False))
+        assert np.degrees(np.arctan((lab[0] - 50) / lab[2])) == pytest.approx(ita, abs=1.0)
+        L.append(lab[0])
+    assert L[0] < 30 and L[-1] > 70 and np.all(np.diff(L) > 0)
+    masks = {"lips": np.zeros((8, 8), np.float32)}
+    masks["lips"][2:4, 2:4] = 1
+    img = render_skin_texture(SkinParams(lip_darkening=0.8, lip_redness=0.8), masks, 8)
+    assert img[3, 3, 0] / img[3, 3, 1] > img[0, 0, 0] / img[0, 0, 1]
+
+
+def test_keypoints_are_anatomical(human):
+    kp = human.keypoints()
+    names = human.body.keypoint_labels
+    k = {n: kp[i] for i, n in enumerate(names)}
+    assert len(kp) == 23
+    assert k["nose"][1] > k["left_shoulder"][1] > k["left_hip"][1] > k["left_knee"][1] > k["left_ankle"][1]
+    assert k["left_shoulder"][0] > 0 > k["right_shoulder"][0]  # the subject's left is +x
+    assert k["nose"][2] > k["left_ear"][2]  # facing +z
+    assert 0 <= k["left_heel"][1] < 0.12
+
+
+def test_subject_renders_with_instance_and_layer_ids(human):
+    scene = sm.Scene()
+    human.add_to(scene, instance=7)
+    scene.set_environment(sm.Constant(1.0))
+    cam = sm.Camera.look_at(eye=(0.4, 1.1, 3.2), target=(0, 0.9, 0), fov_y_deg=40, width=48, height=64)
+    s = sm.render(scene, cam, spp=2)
+    assert set(np.unique(s.instance)) == {0, 7}
+    seen = set(np.unique(s.layer))
+    assert {int(sm.Layer.BODY), int(sm.Layer.TOP), int(sm.Layer.BOTTOM), int(sm.Layer.SHOES)} <= seen
+    assert s.rgb[s.mask].mean() > 0.05
+
+
+def test_walk_retargets_onto_the_subject(human):
+    m = sm.retarget(sm.procedural_motion("walk", np.random.default_rng(0), seconds=1.0), human.skeleton)
+    heels = []
+    for f in range(0, m.n_frames, 5):
+        k = human.keypoints(*m.frame(f))
+        heels.append(min(k[human.body.keypoint_labels.index("left_heel"), 1],
+                         k[human.body.keypoint_labels.index("right_heel"), 1]))
+    assert max(heels) < 0.12 and min(heels) > -0.05  # a foot stays on the ground
+    assert m.root_translation[-1, 2] > 0.5  # walks forward (+z)
+
+
+def test_smplx_backend_with_a_synthetic_model(tmp_path, monkeypatch):
+    from synmitsuba.body.smplx_model import smplx_body
+    rng = np.random.default_rng(0)
+    V, J = 10475, 55
+    v = rng.normal(0, 0.2, (V, 3)) + [0, 0.9, 0]
+    Jreg = np.zeros((J, V))
+    Jreg[np.arange(J), rng.integers(0, V, J)] = 1.0
+    parents = np.concatenate([[2 ** 32 - 1], np.arange(J - 1)])
+    W = rng.random((V, J))
+    np.savez(tmp_path / "SMPLX_NEUTRAL.npz", v_template=v, f=rng.integers(0, V, (20908, 3)),
+             shapedirs=rng.normal(0, 0.01, (V, 3, 10)), J_regressor=Jreg, weights=W / W.sum(1, keepdims=True),
+             kintree_table=np.stack([parents, np.arange(J)]))
+    monkeypatch.delenv("SMPLX_MODEL_PATH", raising=False)
+    with pytest.raises(ConfigError) as e:
+        smplx_body()
+    assert "SMPLX_MODEL_PATH" in str(e.value)
+    monkeypatch.setenv("SMPLX_MODEL_PATH", str(tmp_path))
+    b0 = smplx_body()
+    b1 = smplx_body(betas=[1.0] + [0] * 9)
+    assert b0.vertices.shape == (V, 3) and abs(b0.vertices[:, 1].min()) < 1e-12
+    assert not np.allclose(b0.vertices, b1.vertices)
+    assert b0.skeleton.names[0] == "pelvis" and len(b0.skeleton) == J
+    T = bone_transforms(b0.skeleton)
+    assert np.allclose(skin(b0.vertices, b0.weights, T), b0.vertices)
+    R = np.broadcast_to(np.eye(3), (J, 3, 3)).copy()
+    R[0] = axis_rotation("y", np.pi / 2)
+    posed = skin(b0.vertices, b0.weights, bone_transforms(b0.skeleton, R))
+    root = b0.skeleton.rest_positions[0]
+    np.testing.assert_allclose(posed[:, 1], b0.vertices[:, 1], atol=1e-9)  # a yaw keeps heights
+    assert np.allclose(np.linalg.norm((posed - root)[:, [0, 2]], axis=1), np.linalg.norm((b0.vertices - root)[:, [0, 2]], axis=1))
+    with pytest.raises(ConfigError):
+        sm.build_subject(sm.SubjectRecipe(model="smplx"))
+
+
+def test_a_few_dozen_random_subjects_build_without_degenerate_meshes():
+    for seed in range(24):
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(1000 + seed), {"texture_size": 64}))
+        for layer in h.pose():
+            if layer.is_curves:
+                assert np.isfinite(layer.points).all() and (layer.radius > 0).all()
+                continue
+            v, f = layer.vertices, layer.faces
+            assert len(f) > 0 and np.isfinite(v).all() and f.max() < len(v), layer.name
+            area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+            assert (area > 0).mean() > 0.99, layer.name
