@@ -87,3 +87,22 @@ def test_demo_scene_file_parses():
     import pathlib
     sf = load_scene_file(pathlib.Path(__file__).parents[1] / "scenes" / "demo.yaml")
     assert len(sf.cameras) >= 2 and len(sf.scene.meshes) >= 4
+
+
+def test_scene_file_with_a_posed_subject(sm, tmp_path):
+    (tmp_path / "people.yaml").write_text(textwrap.dedent("""
+        render: {spp: 2, width: 32, height: 48}
+        environment: {type: constant, radiance: 1.0}
+        objects:
+          - {name: ground, primitive: {type: box, extents: [10, 0.02, 10]}, position: [0, -0.01, 0], instance: 0, layer: ground}
+        subjects:
+          - {seed: 4, position: [0.2, 0.0], yaw_deg: 90, motion: walk, frame: 10, instance: 21}
+        cameras:
+          - {name: cam, look_at: {eye: [0, 1.0, 4.0], target: [0, 0.9, 0], fov_y_deg: 40}}
+    """))
+    assert main(["render", str(tmp_path / "people.yaml"), "--out", str(tmp_path / "o"), "--quiet"]) == 0
+    s = sm.read_sample(tmp_path / "o" / "cam")
+    assert set(np.unique(s.instance)) == {0, 21}
+    assert int(sm.Layer.BODY) in set(np.unique(s.layer))
+    (tmp_path / "bad.yaml").write_text((tmp_path / "people.yaml").read_text().replace("motion: walk", "motion: moonwalk"))
+    assert main(["render", str(tmp_path / "bad.yaml"), "--out", str(tmp_path / "o")]) == 2

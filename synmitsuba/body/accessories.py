@@ -114,7 +114,7 @@ def build_accessory(p: AccessoryParams, body, head) -> tuple[np.ndarray, np.ndar
     if p.kind == "mask":
         rel = body.vertices - c
         fwd, up = head["forward"], head["up"]
-        sel = ((rel @ fwd) > 0.3 * rad[2]) & ((rel @ up) < 0.0) & ((rel @ up) > -rad[1] * 0.95)
+        sel = ((rel @ fwd) > 0.3 * rad[2]) & ((rel @ up) < -0.3 * rad[1]) & ((rel @ up) > -rad[1] * 1.05)
         from synmitsuba.body.topology import submesh, vertex_normals
         used, f = submesh(body.faces, sel)
         n = vertex_normals(body.vertices, body.faces)[used]

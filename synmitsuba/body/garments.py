@@ -138,7 +138,7 @@ def _region(kind: str, g: GarmentParams, r: BodyRegions, v: np.ndarray) -> np.nd
 
 def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, n_seg: int = 48):
     """A skirt surface from top_y down, flaring outwards, outside every body vertex it passes."""
-    v = body.vertices
+    v = body.vertices[np.isin(r.group, ["torso", "upperleg", "lowerleg"])]  # not the hanging arms
     bottom = r.hip_y - 0.1 - (r.hip_y - 0.1 - 0.15) * g.length
     heights = np.linspace(top_y, bottom, 14)
     centre = v[(v[:, 1] < top_y) & (v[:, 1] > bottom)][:, [0, 2]].mean(0)

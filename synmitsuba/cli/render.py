@@ -27,7 +27,7 @@ def run(args) -> int:
     os.makedirs(args.out, exist_ok=True)
     if sf.subjects:
         from synmitsuba.pipeline import add_subjects
-        add_subjects(sf.scene, sf.subjects, seed=seed)
+        add_subjects(sf.scene, sf.subjects, seed=seed, base=os.path.dirname(os.path.abspath(args.scene)))
     written = []
     for name, cam in tqdm(sf.cameras, desc="views", unit="view", disable=args.quiet):
         if args.res:

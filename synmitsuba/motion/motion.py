@@ -80,6 +80,18 @@ class Motion:
         root = self.root_translation[i0] * (1 - w)[:, None] + self.root_translation[i1] * w[:, None]
         return replace(self, rotations=quat_to_matrix(qi), root_translation=root, fps=float(fps))
 
+    def moved(self, yaw_deg: float = 0.0, translation=(0.0, 0.0, 0.0)) -> "Motion":
+        """The motion turned by ``yaw_deg`` about the vertical axis through the origin, then
+        shifted by ``translation`` (metres): how a clip is placed in a scene."""
+        from synmitsuba.motion.rotations import axis_rotation
+        Ry = axis_rotation("y", np.radians(yaw_deg))
+        rot = self.rotations.copy()
+        roots = np.flatnonzero(self.skeleton.parents < 0)
+        rot[:, roots] = Ry @ rot[:, roots]
+        rest = self.skeleton.rest_positions[0]
+        root = (rest + self.root_translation) @ Ry.T - rest + np.asarray(translation, dtype=np.float64)
+        return replace(self, rotations=rot, root_translation=root)
+
     def frame(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """(rotations (J, 3, 3), root_translation (3,)) of frame i."""
         return self.rotations[i], self.root_translation[i]
