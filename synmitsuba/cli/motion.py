@@ -49,12 +49,14 @@ def preview(args) -> int:
         motion = sm.retarget(motion, human.skeleton)
     frames = np.linspace(0, motion.n_frames - 1, args.frames).round().astype(int)
     pelvis = motion.joint_positions()[:, 0]
+    height = float(motion.skeleton.rest_positions[:, 1].max()) + 0.15
     w, h = (int(x) for x in args.res.split("x"))
     images = []
     for f in frames:
         scene = _frame_scene(sm, motion, f, human)
-        centre = np.array([pelvis[f, 0], 0.9, pelvis[f, 2]])  # follow the subject
-        cam = sm.Camera.look_at(eye=centre + [3.2, 0.4, 1.6], target=centre, fov_y_deg=35, width=w, height=h)
+        centre = np.array([pelvis[f, 0], 0.5 * height, pelvis[f, 2]])  # follow the subject
+        cam = sm.Camera.look_at(eye=centre + [3.6 * height / 1.8, 0.3, 1.8 * height / 1.8], target=centre,
+                                fov_y_deg=38, width=w, height=h)
         images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=args.seed).rgb))
     os.makedirs(args.out, exist_ok=True)
     name = os.path.splitext(os.path.basename(args.clip))[0]
