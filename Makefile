@@ -37,7 +37,8 @@ llvm: $(STAMP)
 
 demo: setup
 	$(VENV)/bin/synmitsuba render scenes/demo.yaml --out out/demo
-	@echo "demo pictures: $(CURDIR)/out/demo/*.png"
+	$(VENV)/bin/synmitsuba motion preview walk --out out/demo --frames 6 --seed 6
+	@echo "demo pictures: $(CURDIR)/out/demo/*.png (views with EXR + JSON ground truth, walk_strip.png)"
 
 test: setup
 	$(PY) -m pytest -q
@@ -47,6 +48,9 @@ test-all: setup
 
 bench: setup
 	$(PY) bench/render_passes.py
+	$(PY) bench/motion_retarget.py
+	$(PY) bench/subject_pose.py
+	$(PY) bench/subjects_robustness.py 200
 
 clean:
 	rm -rf out .pytest_cache
