@@ -280,3 +280,59 @@ def test_motion_preview_cli_writes_a_strip(tmp_path):
     img = np.asarray(Image.open(tmp_path / "walk_strip.png"))
     assert img.shape[1] > 3 * 40 and img.shape[0] >= 50
     assert img[..., 0].std() > 5  # not a blank picture
+
+
+CMU_TREE = [  # name, parent, offset in CMU units (~5.6 cm), T-pose
+    ("Hips", None, (0, 0, 0)), ("LHipJoint", "Hips", (0, 0, 0)), ("LeftUpLeg", "LHipJoint", (1.6, -1.7, 0.8)),
+    ("LeftLeg", "LeftUpLeg", (0, -7.5, 0)), ("LeftFoot", "LeftLeg", (0, -7.4, 0)), ("LeftToeBase", "LeftFoot", (0, -0.4, 2.2)),
+    ("RHipJoint", "Hips", (0, 0, 0)), ("RightUpLeg", "RHipJoint", (-1.6, -1.7, 0.8)), ("RightLeg", "RightUpLeg", (0, -7.5, 0)),
+    ("RightFoot", "RightLeg", (0, -7.4, 0)), ("RightToeBase", "RightFoot", (0, -0.4, 2.2)),
+    ("LowerBack", "Hips", (0, 2.0, -0.2)), ("Spine", "LowerBack", (0, 2.0, 0)), ("Spine1", "Spine", (0, 2.0, 0)),
+    ("Neck", "Spine1", (0, 1.7, 0)), ("Neck1", "Neck", (0, 1.0, 0)), ("Head", "Neck1", (0, 1.0, 0)),
+    ("LeftShoulder", "Spine1", (0, 1.5, 0)), ("LeftArm", "LeftShoulder", (3.0, 0, 0)), ("LeftForeArm", "LeftArm", (5.0, 0, 0)),
+    ("LeftHand", "LeftForeArm", (4.3, 0, 0)), ("RightShoulder", "Spine1", (0, 1.5, 0)), ("RightArm", "RightShoulder", (-3.0, 0, 0)),
+    ("RightForeArm", "RightArm", (-5.0, 0, 0)), ("RightHand", "RightForeArm", (-4.3, 0, 0)),
+]
+
+
+def cmu_bvh(frames: np.ndarray) -> str:
+    children = {}
+    for name, parent, _ in CMU_TREE:
+        children.setdefault(parent, []).append(name)
+    offsets = {n: o for n, _, o in CMU_TREE}
+
+    def block(name, depth):
+        pad = "  " * depth
+        kind = "ROOT" if depth == 0 else "JOINT"
+        chans = "6 Xposition Yposition Zposition Zrotation Yrotation Xrotation" if depth == 0 else "3 Zrotation Yrotation Xrotation"
+        text = f"{pad}{kind} {name}\n{pad}{{\n{pad}  OFFSET {' '.join(map(str, offsets[name]))}\n{pad}  CHANNELS {chans}\n"
+        for c in children.get(name, []):
+            text += block(c, depth + 1)
+        if name not in children:
+            text += f"{pad}  End Site\n{pad}  {{\n{pad}    OFFSET 0 1 0\n{pad}  }}\n"
+        return text + f"{pad}}}\n"
+    lines = "\n".join(" ".join(f"{x:.4f}" for x in row) for row in frames)
+    return f"HIERARCHY\n{block('Hips', 0)}MOTION\nFrames: {len(frames)}\nFrame Time: 0.0083333\n{lines}\n"
+
+
+def test_cmu_bvh_retargets_onto_anny_with_the_builtin_map(tmp_path):
+    from synmitsuba.body.anny_model import anny_body
+    n = len(CMU_TREE)
+    rng = np.random.default_rng(5)
+    frames = np.zeros((4, 3 + 3 * n))
+    frames[:, 1] = 17.0
+    frames[:, 3:] = np.round(rng.uniform(-40, 40, (4, 3 * n)), 3)
+    (tmp_path / "cmu.bvh").write_text(cmu_bvh(frames))
+    m = sm.load_bvh(tmp_path / "cmu.bvh")
+    assert m.meta["metres_per_unit"] == pytest.approx(0.0254 / 0.45)
+    anny = anny_body().skeleton
+    r = sm.retarget(m, anny)
+    ps, pt = m.joint_positions(), r.joint_positions()
+    for (a, b), (c, d) in [(("LeftArm", "LeftForeArm"), ("upperarm01.L", "lowerarm01.L")),
+                           (("RightForeArm", "RightHand"), ("lowerarm01.R", "wrist.R")),
+                           (("LeftUpLeg", "LeftLeg"), ("upperleg01.L", "lowerleg01.L")),
+                           (("RightLeg", "RightFoot"), ("lowerleg01.R", "foot.R"))]:
+        u = ps[:, m.skeleton.index(b)] - ps[:, m.skeleton.index(a)]
+        v = pt[:, anny.index(d)] - pt[:, anny.index(c)]
+        cos = (u * v).sum(1) / np.linalg.norm(u, axis=1) / np.linalg.norm(v, axis=1)
+        assert cos.min() > 1 - 1e-6, (a, c)
