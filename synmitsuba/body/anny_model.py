@@ -8,8 +8,10 @@ The built model is cached on disk by anny (``ANNY_CACHE_DIR``) and in this proce
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,10 +37,10 @@ def load_anny():
     """The anny model (float32, CPU), built once per process; anny caches it on disk too."""
     os.environ.setdefault("ANNY_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "anny"))
     import torch
-
-    import anny
-    torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
-    return anny.Anny().to(dtype=torch.float32)
+    with contextlib.redirect_stdout(sys.stderr):  # warp-lang's banners stay out of our stdout
+        import anny
+        torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
+        return anny.Anny().to(dtype=torch.float32)
 
 
 @functools.lru_cache(maxsize=1)
@@ -96,7 +98,7 @@ def _shaped(key: tuple) -> tuple[np.ndarray, np.ndarray]:
     m = load_anny()
     J = len(m.bone_labels)
     pheno = {k: torch.tensor([v], dtype=torch.float32) for k, v in key}
-    with torch.no_grad():
+    with torch.no_grad(), contextlib.redirect_stdout(sys.stderr):
         out = m(pose_parameters=torch.eye(4).expand(1, J, 4, 4).clone(), phenotype_kwargs=pheno)
     verts = out["rest_vertices"][0].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
     heads = out["rest_bone_heads"][0].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
