@@ -267,3 +267,36 @@ def test_a_few_dozen_random_subjects_build_without_degenerate_meshes():
             assert len(f) > 0 and np.isfinite(v).all() and f.max() < len(v), layer.name
             area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
             assert (area > 0).mean() > 0.99, layer.name
+
+
+def test_identity_pose_is_the_rest_mesh_and_a_shoulder_moves_only_its_arm(human):
+    sk, body = human.skeleton, human.body
+    rest = skin(body.vertices, body.weights, bone_transforms(sk))
+    assert np.abs(rest - body.vertices).max() < 1e-6
+    R = np.broadcast_to(np.eye(3), (len(sk), 3, 3)).copy()
+    R[sk.index("upperarm01.L")] = axis_rotation("z", np.radians(60))
+    moved = np.linalg.norm(skin(body.vertices, body.weights, bone_transforms(sk, R)) - body.vertices, axis=1) > 1e-4
+    assert moved.any()
+    assert not moved[body.vertices[:, 0] < -0.05].any()  # the subject's right side (-x) stays
+    assert (body.vertices[moved, 0] > 0.15).mean() > 0.8  # what moves is mostly the left arm
+
+
+def test_every_body_and_garment_parameter_changes_the_subject():
+    import json
+    base = sm.sample_subject(np.random.default_rng(2), {"outfit": ["tshirt", "trousers"], "shoes": False,
+                                                        "jacket": False, "accessories": [], "texture_size": 64})
+    ref = {p.name: p.vertices for p in sm.build_subject(base).pose() if not p.is_curves}
+    d = base.to_dict()
+    changes = [("phenotypes", k, v) for k, v in [("gender", 0.1), ("age", 0.9), ("muscle", 0.95), ("weight", 0.05),
+                                                  ("height", 0.95), ("proportions", 0.05)]]
+    changes += [("garments", k, v) for k, v in [("size", 0.0), ("ease", 0.04), ("length", 0.3), ("thickness", 0.015)]]
+    for section, key, value in changes:
+        e = json.loads(json.dumps(d))
+        if section == "phenotypes":
+            e["phenotypes"][key] = value if abs(e["phenotypes"][key] - value) > 0.2 else 1 - value
+            target = "body"
+        else:
+            e["garments"][1][key] = value  # the trousers: the innermost layer, no nesting floor
+            target = e["garments"][1]["kind"]
+        other = {p.name: p.vertices for p in sm.build_subject(sm.SubjectRecipe.from_dict(e)).pose() if not p.is_curves}
+        assert other[target].shape != ref[target].shape or not np.allclose(other[target], ref[target]), (section, key)

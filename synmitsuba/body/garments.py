@@ -215,7 +215,8 @@ class GarmentMesh:
 
 def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
     size = 0.7 + 0.6 * g.size
-    return max(BASE_OFFSET[g.kind] + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
+    fit = 0.004 * g.size  # a larger size sits further out even with no ease
+    return max(BASE_OFFSET[g.kind] + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
 
 
 def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0) -> GarmentMesh:
