@@ -6,7 +6,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from synmitsuba.body.textures import _check, _from_dict, sample_lab_colour
+from synmitsuba.body.params import check as _check
+from synmitsuba.body.params import from_dict as _from_dict
+from synmitsuba.body.textures import sample_lab_colour
 from synmitsuba.scene.layers import Layer
 
 KINDS = ("glasses", "cap", "headphones", "backpack", "watch", "mask")

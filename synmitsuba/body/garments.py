@@ -14,7 +14,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from synmitsuba.body.binding import closest_points, signed_distance
-from synmitsuba.body.textures import GarmentTextureParams, _check
+from synmitsuba.body.params import check as _check
+from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import submesh, vertex_normals
 from synmitsuba.errors import ConfigError
 from synmitsuba.scene.layers import Layer

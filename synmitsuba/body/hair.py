@@ -11,7 +11,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from synmitsuba.body.textures import _check, _from_dict
+from synmitsuba.body.params import check as _check
+from synmitsuba.body.params import from_dict as _from_dict
 from synmitsuba.errors import ConfigError
 
 REGIONS = ("fringe", "top", "temporal", "occipital", "lower_back", "beard")

@@ -8,11 +8,13 @@ deterministic in the parameters (noise is seeded by a seed stored in them).
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from synmitsuba._colour import import_colour
+from synmitsuba.body.params import check as _check
+from synmitsuba.body.params import from_dict as _from_dict
 from synmitsuba.errors import ConfigError
 
 PATTERNS = ("none", "stripes", "checks", "plaid", "dots", "camouflage", "gradient")
@@ -38,25 +40,6 @@ def sample_lab_colour(rng: np.random.Generator, l_range=(20, 85), chroma=(5, 70)
     c = rng.uniform(*chroma)
     h = rng.uniform(0, 2 * np.pi)
     return [round(float(L), 3), round(float(c * np.cos(h)), 3), round(float(c * np.sin(h)), 3)]
-
-
-def _from_dict(cls, d: dict, where: str):
-    names = {f.name for f in fields(cls)}
-    for k in d:
-        if k not in names:
-            raise ConfigError(f"{where}.{k}", d[k], f"unknown field; fields: {', '.join(sorted(names))}")
-    obj = cls(**d)
-    obj.validate(where)
-    return obj
-
-
-def _check(where: str, name: str, value, low=None, high=None, choices=None):
-    if choices is not None:
-        if value not in choices:
-            raise ConfigError(f"{where}.{name}", value, f"use one of {', '.join(choices)}")
-        return
-    if not isinstance(value, (int, float)) or not low <= value <= high:
-        raise ConfigError(f"{where}.{name}", value, f"give a number in [{low}, {high}]")
 
 
 def _check_lab(where: str, name: str, value):
