@@ -22,7 +22,7 @@ def timed(fn, repeat: int = 5) -> float:
 def main() -> dict:
     import synmitsuba as sm
     from synmitsuba.body.anny_model import anny_body
-    from synmitsuba.motion.rotations import axis_angle_to_matrix
+    from synmitsuba.geometry import axis_angle_to_matrix
     target = anny_body().skeleton
     rng = np.random.default_rng(0)
     walk = sm.procedural_motion("walk", rng, seconds=2.0)

@@ -26,7 +26,7 @@ def main(res: int = 512, spp: int = 64) -> dict:
     import drjit as dr
 
     import synmitsuba as sm
-    from synmitsuba.io.scenefile import load_scene_file
+    from synmitsuba.compose.scenefile import load_scene_file
     from synmitsuba.render.variant import thread_count
     sm.set_variant()
     dr.set_flag(dr.JitFlag.KernelHistory, True)
@@ -38,7 +38,7 @@ def main(res: int = 512, spp: int = 64) -> dict:
         t = time.perf_counter()
         s = sm.render(sf.scene, cam, spp=spp, seed=seed)
         wall = time.perf_counter() - t
-        sec = s.meta["seconds"]
+        sec = s.timings
         runs.append({"render": label, "wall_s": round(wall, 3), "build_s": round(sec["build"], 3),
                      "rgb_s": round(sec["rgb"], 3), "exact_s": round(sec["exact"], 3),
                      "exact_over_rgb": round(sec["exact"] / sec["rgb"], 4),

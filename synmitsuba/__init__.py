@@ -5,20 +5,31 @@
     scene = sm.Scene(); scene.add_mesh(...)
     sample = sm.render(scene, sm.Camera.look_at(...), spp=16, seed=0)
     sm.write_sample(sample, "out/0000")
+
+Names are imported on first use: ``import synmitsuba`` loads neither Mitsuba nor torch.
 """
+from synmitsuba._lazy import lazy_exports
+
 __version__ = "0.1.0"
 
-from synmitsuba.errors import ConfigError, LLVMError, SynMitsubaError
-from synmitsuba.scene import *  # noqa: F401,F403
-from synmitsuba.scene import __all__ as _scene_all
-from synmitsuba.render import *  # noqa: F401,F403
-from synmitsuba.render import __all__ as _render_all
-from synmitsuba.io import *  # noqa: F401,F403
-from synmitsuba.io import __all__ as _io_all
-from synmitsuba.body import *  # noqa: F401,F403
-from synmitsuba.body import __all__ as _body_all
-from synmitsuba.motion import *  # noqa: F401,F403
-from synmitsuba.motion import __all__ as _motion_all
+_FROM = {
+    "synmitsuba.errors": ("ConfigError", "LLVMError", "SynMitsubaError", "SynMitsubaWarning"),
+    "synmitsuba.scene": ("Camera", "Layer", "Material", "Constant", "SunSky", "EnvMap", "PointLight",
+                         "DirectionalLight", "AreaLight", "Scene", "MeshShape", "CurveShape"),
+    "synmitsuba.sample": ("Sample", "PASSES", "register_pass"),
+    "synmitsuba.render.variant": ("set_variant", "current_variant"),
+    "synmitsuba.io": ("write_sample", "read_sample", "SampleDataset", "list_samples", "to_srgb8", "write_png",
+                      "contact_sheet"),
+    "synmitsuba.body": ("SubjectRecipe", "sample_subject", "build_subject", "LayeredHuman", "PosedLayer", "Skeleton",
+                        "forward_kinematics", "anny_uv_masks", "GARMENT_KINDS", "ACCESSORY_KINDS"),
+    "synmitsuba.motion": ("Motion", "load_bvh", "parse_bvh", "BVHError", "load_amass", "smplx_skeleton",
+                          "procedural_motion", "MOTION_KINDS", "foot_sliding", "retarget", "humanoid_skeleton",
+                          "MotionLibrary", "random_window", "is_allowed", "load_motion"),
+    "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry"),
+    "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index"),
+}
+_EXPORTS = {name: module for module, names in _FROM.items() for name in names}
+_EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function
 
-__all__ = ["ConfigError", "LLVMError", "SynMitsubaError", *_scene_all, *_render_all, *_io_all,
-           *_body_all, *_motion_all]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

@@ -15,3 +15,8 @@ class ConfigError(SynMitsubaError, ValueError):
 
 class LLVMError(SynMitsubaError, RuntimeError):
     """drjit's LLVM backend cannot run with the libLLVM on this machine."""
+
+
+class SynMitsubaWarning(UserWarning):
+    """Something that renders but is probably not what was meant (a view that sees nothing,
+    a scene without light)."""

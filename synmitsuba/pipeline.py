@@ -1,64 +1,84 @@
-"""Glue from descriptions to scenes: subjects (recipe + motion + placement) into a Scene.
+"""One sequence from a config and an index: what a generation executor (a local process pool or
+a Ray worker) calls per task. Every seed derives from (``config.seed``, ``index``) alone, so a
+sequence is the same whoever renders it, in whatever order.
 
-A subject entry (scene files' ``subjects:`` list) reads:
-``{seed: 3, position: [x, z], yaw_deg: 30, motion: walk, frame: 20, recipe: file.json, instance: 5}``;
-every key is optional. ``motion`` is a procedural kind, a .bvh or an AMASS .npz.
+    cfg = sm.SequenceConfig(scene="scenes/demo.yaml", frames=4, stride=5)
+    stems = sm.render_sequence_index(cfg, index=7, out="out/dataset")   # out/dataset/seq_000007/...
 """
 from __future__ import annotations
 
+import dataclasses
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.compose.scenefile import load_scene_file, read_scene_doc
+from synmitsuba.compose.subjects import add_subjects
 from synmitsuba.errors import ConfigError
+from synmitsuba.io.exr import write_sample
+from synmitsuba.render.passes import render
+from synmitsuba.schema import Number, Params, Text, optional, spec
 
-SUBJECT_KEYS = {"seed", "position", "yaw_deg", "motion", "frame", "recipe", "instance", "config"}
-
-
-def subject_motion(entry: dict, human, rng: np.random.Generator, base: str = ""):
-    """The entry's motion retargeted to the subject and placed (yaw, position)."""
-    import synmitsuba as sm
-    kind = entry.get("motion", "idle")
-    if kind in sm.MOTION_KINDS:
-        motion = sm.procedural_motion(kind, rng, seconds=2.0)
-    elif str(kind).lower().endswith(".bvh"):
-        motion = sm.load_bvh(os.path.join(base, kind))
-    elif str(kind).lower().endswith(".npz"):
-        motion = sm.load_amass(os.path.join(base, kind))
-    else:
-        raise ConfigError("subjects[].motion", kind, f"use a .bvh/.npz file or one of {', '.join(sm.MOTION_KINDS)}")
-    motion = sm.retarget(motion, human.skeleton)
-    pos = np.asarray(entry.get("position", [0.0, 0.0]), dtype=np.float64)
-    if pos.shape not in ((2,), (3,)):
-        raise ConfigError("subjects[].position", entry.get("position"), "give [x, z] (or [x, 0, z]) metres")
-    offset = np.array([pos[0], 0.0, pos[-1]])
-    centre = motion.joint_positions()[:, 0].mean(0)  # the clip's mean ground position goes to the spot
-    centred = motion.moved(0.0, [-centre[0], 0.0, -centre[2]])
-    return centred.moved(float(entry.get("yaw_deg", 0.0)), offset)
+POSITIVE = Number(1, integer=True)
 
 
-def add_subjects(scene, entries: list, seed: int = 0, base: str = "") -> list:
-    """Build, pose and add every subject entry to ``scene``; returns [(human, motion, frame)]."""
-    import synmitsuba as sm
-    placed = []
-    for i, entry in enumerate(entries):
-        if not isinstance(entry, dict):
-            raise ConfigError(f"subjects[{i}]", entry, "give a mapping like {seed: 3, position: [x, z], motion: walk}")
-        unknown = sorted(set(entry) - SUBJECT_KEYS)
-        if unknown:
-            raise ConfigError(f"subjects[{i}].{unknown[0]}", entry[unknown[0]], f"keys: {', '.join(sorted(SUBJECT_KEYS))}")
-        rng = np.random.default_rng([seed, i, int(entry.get("seed", i))])
-        if "recipe" in entry:
-            path = os.path.join(base, entry["recipe"])
-            if not os.path.isfile(path):
-                raise ConfigError(f"subjects[{i}].recipe", entry["recipe"], "no such recipe file")
-            recipe = sm.SubjectRecipe.from_json(open(path).read())
-        else:
-            recipe = sm.sample_subject(np.random.default_rng(int(entry.get("seed", i))), entry.get("config"))
-        human = sm.build_subject(recipe)
-        motion = subject_motion(entry, human, rng, base)
-        frame = int(entry.get("frame", motion.n_frames // 2)) % motion.n_frames
-        instance = int(entry.get("instance", 100 + i))
-        human.add_to(scene, *motion.frame(frame), instance=instance, prefix=f"subject{i}")
-        placed.append((human, motion, frame))
-    return placed
+@dataclass
+class SequenceConfig(Params):
+    """A sequence: the scene file whose objects, lights and cameras it uses, how many frames of
+    its subjects' clips to render, and what to override."""
+
+    scene: str = spec(check=Text(), doc="scene file (YAML); its subjects without a seed are sampled per sequence")
+    frames: int = spec(4, POSITIVE, doc="frames rendered per sequence")
+    stride: int = spec(1, POSITIVE, doc="clip frames between rendered frames")
+    seed: int = spec(0, Number(0, 2 ** 32 - 1, integer=True), doc="global seed")
+    spp: int | None = spec(None, optional(POSITIVE), doc="default: the scene file's render.spp")
+    width: int | None = spec(None, optional(POSITIVE), doc="default: each camera's own")
+    height: int | None = spec(None, optional(POSITIVE))
+
+
+def sequence_seeds(seed: int, index: int) -> dict:
+    """The seeds of sequence ``index``: subjects, motions and rendering, from (seed, index) only."""
+    state = np.random.SeedSequence([int(seed), int(index)]).generate_state(3)
+    return {"subjects": int(state[0]), "motions": int(state[1]), "render": int(state[2] % 2 ** 31)}
+
+
+def _subject_entries(doc, seeds: dict) -> list:
+    """Scene-file subjects; those without a seed get one from the sequence, so each sequence
+    has its own people (explicit seeds keep the same person in every sequence)."""
+    rng = np.random.default_rng(seeds["subjects"])
+    picks = rng.integers(0, 2 ** 31, len(doc.subjects))
+    return [e if e.seed is not None else dataclasses.replace(e, seed=int(p)) for e, p in zip(doc.subjects, picks)]
+
+
+def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | None = None) -> list:
+    """Build and render sequence ``index`` of ``config``: the scene, its subjects (moved in
+    place frame by frame), every camera at every frame. With ``out``, writes
+    ``out/seq_XXXXXX/fFFFF_<camera>`` samples and returns their stems; else returns
+    ``[(frame, camera name, Sample)]``."""
+    cfg = config if isinstance(config, SequenceConfig) else SequenceConfig.from_dict(config, "config")
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
+        raise ConfigError("index", index, "give a sequence index >= 0")
+    doc = read_scene_doc(cfg.scene)  # checked in full before any building
+    seeds = sequence_seeds(cfg.seed, index)
+    sf = load_scene_file(cfg.scene, subjects=False)
+    base = os.path.dirname(os.path.abspath(cfg.scene))
+    placed = add_subjects(sf.scene, _subject_entries(doc, seeds), seed=seeds["motions"], base=base)
+    spp = cfg.spp or sf.settings.spp
+    folder = os.path.join(out, f"seq_{index:06d}") if out is not None else None
+    results = []
+    for k in range(cfg.frames):
+        for s in placed:
+            s.pose_in(sf.scene, s.frame + k * cfg.stride)
+        for name, cam in sf.cameras:
+            if cfg.width or cfg.height:
+                cam = cam.resized(cfg.width or cam.width, cfg.height or cam.height)
+            sample = render(sf.scene, cam, spp=spp, seed=seeds["render"] + k, max_depth=sf.settings.max_depth)
+            sample.meta.update(sequence=index, frame=k, camera=name)
+            if folder is None:
+                results.append((k, name, sample))
+            else:
+                stem = os.path.join(folder, f"f{k:04d}_{name}")
+                write_sample(sample, stem)
+                results.append(stem)
+    return results

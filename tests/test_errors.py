@@ -38,7 +38,10 @@ def test_faces_out_of_range(sm):
 def test_singular_K(sm):
     with pytest.raises(ConfigError) as e:
         sm.Camera(K=np.array([[0.0, 0, 10], [0, 100, 10], [0, 0, 1]]), width=20, height=20)
-    check(e, "camera.K", "singular")
+    check(e, "camera.K", "must be > 0")
+    with pytest.raises(ConfigError) as e:  # fx, fy > 0 but singular: the fix names the real problem
+        sm.Camera(K=np.array([[100.0, 100, 10], [100, 100, 10], [0, 0, 1]]), width=20, height=20)
+    check(e, "camera.K", "K[1][0] must be 0")
     with pytest.raises(ConfigError) as e:
         sm.Camera(K=np.array([[100.0, 0, 10], [0, 100, 10], [0, 1, 1]]), width=20, height=20)
     check(e, "camera.K", "last row")

@@ -21,7 +21,7 @@ def test_exr_round_trip_is_bit_exact(sm, tmp_path):
     paths = sm.write_sample(s, tmp_path / "0000")
     assert sorted(p.rsplit(".", 1)[1] for p in paths.values()) == ["exr", "json", "png"]
     r = sm.read_sample(tmp_path / "0000")
-    for name in s.PASSES:
+    for name in s.passes:
         a, b = getattr(s, name), getattr(r, name)
         assert a.dtype == b.dtype and a.shape == b.shape, name
         assert np.array_equal(a, b), name

@@ -32,7 +32,7 @@ def test_envmap_from_file_clamps_negative_pixels(sm, tmp_path):
 
 def test_missing_envmap_file_is_named(sm):
     with pytest.raises(sm.ConfigError) as e:
-        sm.EnvMap("/nonexistent/sky.exr").pixels()
+        sm.EnvMap("/nonexistent/sky.exr")  # refused when made, not first at render time
     assert "environment.file" in str(e.value) and "sky.exr" in str(e.value)
 
 

@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 import synmitsuba as sm
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.bvh import BVHError
-from synmitsuba.motion.retarget import pelvis_height
+from synmitsuba.motion.retargeting import pelvis_height
 
 BVH = """HIERARCHY
 ROOT Hips
@@ -79,6 +79,7 @@ def test_bvh_units_are_detected(tmp_path):
     (lambda t: t.replace("CHANNELS 3", "CHANNELS 3 Wrotation", 1), "line 9"),
     (lambda t: t.rsplit("\n", 2)[0] + "\n1 2 3\n", "frame 2"),
     (lambda t: t.replace("Frame Time: 0.0083333", "Frame Time: 0"), "Frame Time"),
+    (lambda t: t.rsplit("\n", 2)[0] + "\n0 90 0 0 nan 0 0 0 0 0 0 0\n", "frame 2, "),  # named now, not at posing
 ])
 def test_malformed_bvh_names_the_line(mutate, where, tmp_path):
     frames = "0 90 0 0 0 0 0 0 0 0 0 0\n0 90 0 0 0 0 0 0 0 0 0 0"
@@ -132,29 +133,38 @@ def test_retarget_keeps_bone_directions_and_scales_root():
     np.testing.assert_allclose(r.joint_positions()[:, 0], ratio * src.joint_positions()[:, 0], atol=1e-9)
 
 
-def test_retarget_cmu_names_onto_humanoid(tmp_path):
-    """A CMU-named BVH drives the humanoid through the built-in name map."""
-    names = ["Hips", "LowerBack", "Spine", "Spine1", "Neck", "Head"]
+def _cmu_spine_bvh(names, path):
     text = "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n"
-    depth = 1
     for n in names[1:]:
         text += f"JOINT {n}\n{{\n OFFSET 0 4 0\n CHANNELS 3 Zrotation Yrotation Xrotation\n"
-        depth += 1
-    text += "End Site\n{\n OFFSET 0 3 0\n}\n" + "}\n" * depth
-    legs = ""
-    text = text.replace("JOINT LowerBack", legs + "JOINT LowerBack")
-    frames = ["0 17 0 0 0 0 " + " ".join(["0 0 30"] * 5), "0 17 0 0 0 0 " + " ".join(["0 0 30"] * 5)]
-    text += "MOTION\nFrames: 2\nFrame Time: 0.0083333\n" + "\n".join(frames) + "\n"
-    (tmp_path / "cmu.bvh").write_text(text)
-    m = sm.load_bvh(tmp_path / "cmu.bvh", units="cmu")
-    with pytest.raises(ConfigError):  # six spine joints only: legs and arms cannot be matched
-        sm.retarget(m, sm.humanoid_skeleton(), name_map={"Hips": "nope"})
-    r = sm.retarget(m, sm.humanoid_skeleton(), name_map={n: c for n, c in zip(names, ["pelvis", "spine1", "spine2", "chest", "neck", "head"])})
+    text += "End Site\n{\n OFFSET 0 3 0\n}\n" + "}\n" * len(names)
+    values = " ".join(["0 0 30"] * (len(names) - 1))
+    text += "MOTION\nFrames: 2\nFrame Time: 0.0083333\n" + f"0 17 0 0 0 0 {values}\n" * 2
+    path.write_text(text)
+    return sm.load_bvh(path, units="cmu")
+
+
+def test_retarget_cmu_names_onto_humanoid(tmp_path):
+    """A CMU-named BVH drives the humanoid through the built-in name map: the six CMU spine
+    joints are matched to their canonical names by name alone, and the bones follow."""
+    from synmitsuba.motion.retargeting import _pairs
+    names = ["Hips", "LowerBack", "Spine", "Spine1", "Neck", "Head"]
+    m = _cmu_spine_bvh(names, tmp_path / "cmu.bvh")
+    h = sm.humanoid_skeleton()
+    canon = ["pelvis", "spine1", "spine2", "chest", "neck", "head"]
+    expected = {h.index(c): m.skeleton.index(n) for n, c in zip(names + ["Head_end"], canon + ["head_end"])}
+    assert _pairs(m.skeleton, h, None) == expected  # the end site matches too
+    r = sm.retarget(m, h)
     # each spine joint bends 30 deg about x: the neck->head bone tilts by 5 x 30 deg in both
     src_dir = np.diff(m.joint_positions()[0, [4, 5]], axis=0)[0]
-    h = sm.humanoid_skeleton()
     tgt_dir = np.diff(r.joint_positions()[0, [h.index("neck"), h.index("head")]], axis=0)[0]
     assert np.allclose(src_dir / np.linalg.norm(src_dir), tgt_dir / np.linalg.norm(tgt_dir), atol=1e-6)
+    # three recognisable joints are too few to match by name: the error asks for a name_map
+    few = _cmu_spine_bvh(["Hips", "LowerBack", "Spine"], tmp_path / "few.bvh")
+    with pytest.raises(ConfigError, match="could not match the skeletons' joint names"):
+        sm.retarget(few, h)
+    with pytest.raises(ConfigError, match="name_map = 'nope'"):  # a map naming a joint that is not there
+        sm.retarget(m, h, name_map={"Hips": "nope"})
 
 
 def test_resample_slerps_rotations():

@@ -183,7 +183,7 @@ def test_fixed_seed_is_deterministic_and_seed_changes_noise(sm):
     cam = sm.Camera.look_at(eye=(0, 0.5, 2), target=(0, 0, 0), width=24, height=24)
     a, b = sm.render(scene, cam, spp=4, seed=3), sm.render(scene, cam, spp=4, seed=3)
     c = sm.render(scene, cam, spp=4, seed=4)
-    for name in a.PASSES:
+    for name in a.passes:
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert not np.array_equal(a.rgb, c.rgb)
     assert np.array_equal(a.depth, c.depth)

@@ -8,7 +8,7 @@ import synmitsuba as sm
 from synmitsuba.body.binding import bound_points, signed_distance
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.errors import ConfigError
-from synmitsuba.motion.rotations import axis_rotation
+from synmitsuba.geometry import axis_rotation
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,11 @@
 """Layered parametric humans: body models, garments, hair, accessories, textures."""
-from synmitsuba.body.recipe import SubjectRecipe, sample_subject
-from synmitsuba.body.skeleton import Skeleton, forward_kinematics
-from synmitsuba.body.subject import LayeredHuman, PosedLayer, build_subject
+from synmitsuba._lazy import lazy_exports
 
-__all__ = ["SubjectRecipe", "sample_subject", "build_subject", "LayeredHuman", "PosedLayer", "Skeleton",
-           "forward_kinematics"]
+_EXPORTS = {"SubjectRecipe": "synmitsuba.body.recipe", "sample_subject": "synmitsuba.body.recipe",
+            "build_subject": "synmitsuba.body.subject", "LayeredHuman": "synmitsuba.body.subject",
+            "PosedLayer": "synmitsuba.body.subject", "Skeleton": "synmitsuba.body.skeleton",
+            "forward_kinematics": "synmitsuba.body.skeleton", "anny_uv_masks": "synmitsuba.body.anny_model",
+            "GARMENT_KINDS": "synmitsuba.body.garments:GARMENTS",
+            "ACCESSORY_KINDS": "synmitsuba.body.accessories:BUILDERS"}
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

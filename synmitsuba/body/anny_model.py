@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.body.skeleton import Skeleton
-from synmitsuba.errors import ConfigError
+from synmitsuba.schema import MapOf, Number
 
 PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")
 Z_UP_TO_Y_UP = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
@@ -37,7 +37,12 @@ def load_anny():
     """The anny model (float32, CPU), built once per process; anny caches it on disk too."""
     os.environ.setdefault("ANNY_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "anny"))
     import torch
-    with contextlib.redirect_stdout(sys.stderr):  # warp-lang's banners stay out of our stdout
+    try:  # warp-lang (anny's skinning) prints a banner on start; our commands print none
+        import warp
+        warp.config.quiet = True
+    except ImportError:
+        pass
+    with contextlib.redirect_stdout(sys.stderr):
         import anny
         torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
         return anny.Anny().to(dtype=torch.float32)
@@ -81,15 +86,7 @@ class BodyMesh:
     keypoint_labels: tuple
 
 
-def check_phenotypes(values: dict) -> dict:
-    out = {}
-    for k, v in values.items():
-        if k not in PHENOTYPES:
-            raise ConfigError(f"body.phenotypes.{k}", v, f"anny phenotypes are {', '.join(PHENOTYPES)}")
-        if not isinstance(v, (int, float)) or not 0.0 <= v <= 1.0:
-            raise ConfigError(f"body.phenotypes.{k}", v, "give a number in [0, 1]")
-        out[k] = float(v)
-    return out
+PHENOTYPE_CHECK = MapOf(Number(0.0, 1.0), keys=PHENOTYPES)
 
 
 @functools.lru_cache(maxsize=32)
@@ -111,7 +108,7 @@ def _shaped(key: tuple) -> tuple[np.ndarray, np.ndarray]:
 def anny_body(phenotypes: dict | None = None) -> BodyMesh:
     """The anny body shaped by ``phenotypes`` (each in [0, 1], default 0.5)."""
     values = {k: 0.5 for k in PHENOTYPES}
-    values.update(check_phenotypes(phenotypes or {}))
+    values.update(PHENOTYPE_CHECK("phenotypes", phenotypes or {}))
     verts, heads = _shaped(tuple(sorted(values.items())))
     st = _static()
     skel = Skeleton(st["bones"], st["parents"], heads)

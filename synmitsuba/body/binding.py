@@ -6,13 +6,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.geometry import face_normals
+
 
 @dataclass
 class Binding:
     triangle: np.ndarray     # (N,) body face index
     barycentric: np.ndarray  # (N, 3)
     weights: np.ndarray      # (N, J) interpolated skinning weights
-    distance: np.ndarray     # (N,) signed distance to the body in the rest pose (> 0 outside)
 
 
 def _incident_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
@@ -51,9 +52,7 @@ def closest_points(vertices, faces, points, k: int = 4) -> tuple[np.ndarray, np.
 def signed_distance(vertices, faces, points) -> np.ndarray:
     """Distance to the surface, negative inside (sign from the closest triangle's normal)."""
     closest, tri, _ = closest_points(vertices, faces, points)
-    v = vertices[faces[tri]]
-    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    n = face_normals(vertices[faces[tri]])
     d = np.linalg.norm(points - closest, axis=1)
     return np.where(((points - closest) * n).sum(1) < 0, -d, d)
 
@@ -62,7 +61,7 @@ def bind(body_vertices, body_faces, body_weights, points) -> Binding:
     closest, tri, bary = closest_points(body_vertices, body_faces, points)
     w = np.einsum("nk,nkj->nj", bary, body_weights[body_faces[tri]])
     w /= np.maximum(w.sum(1, keepdims=True), 1e-12)
-    return Binding(tri, bary, w.astype(np.float32), signed_distance(body_vertices, body_faces, points))
+    return Binding(tri, bary, w.astype(np.float32))
 
 
 def bound_points(binding: Binding, body_vertices, body_faces) -> np.ndarray:

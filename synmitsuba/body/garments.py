@@ -9,22 +9,18 @@ jackets in offset.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from synmitsuba.body.binding import closest_points, signed_distance
-from synmitsuba.body.params import check as _check
 from synmitsuba.body.textures import GarmentTextureParams
-from synmitsuba.body.topology import submesh, vertex_normals
-from synmitsuba.errors import ConfigError
+from synmitsuba.body.topology import submesh
+from synmitsuba.geometry import face_normals, vertex_normals
+from synmitsuba.schema import Choice, Nested, Number, Params, spec
 from synmitsuba.scene.layers import Layer
 
-KINDS = ("tshirt", "longsleeve", "jacket", "shorts", "trousers", "skirt", "dress", "shoes")
-LAYER = {"tshirt": Layer.TOP, "longsleeve": Layer.TOP, "jacket": Layer.TOP, "shorts": Layer.BOTTOM,
-         "trousers": Layer.BOTTOM, "skirt": Layer.BOTTOM, "dress": Layer.DRESS, "shoes": Layer.SHOES}
-BASE_OFFSET = {"shoes": 0.004, "shorts": 0.005, "trousers": 0.005, "skirt": 0.006, "tshirt": 0.012,
-               "longsleeve": 0.012, "dress": 0.012, "jacket": 0.03}
 CLEARANCE = 0.002
 GROUPS = {
     "torso": ("root", "pelvis", "spine", "clavicle", "shoulder01"),
@@ -34,48 +30,85 @@ GROUPS = {
 }
 
 
+# -- body regions a garment covers (keep masks over the rest body's vertices) -------------
+def _top(sleeve: Callable[[float], float], dress: bool = False):
+    """Torso from the hem (by ``length``; a dress's bodice stops at the hips) to the neck, and
+    the arms to ``sleeve(length)`` (0 shoulder .. 1 wrist)."""
+    def region(g, r, v):
+        y = v[:, 1]
+        torso, legs = r.group == "torso", np.isin(r.group, ["upperleg", "lowerleg"])
+        arms = np.isin(r.group, ["upperarm", "lowerarm"])
+        hem = r.waist_y - (r.waist_y - (r.crotch_y - 0.12)) * (0.6 if dress else g.length)
+        keep = ((torso | legs) & (y >= hem) & (y <= r.neck_y)) | (arms & (r.arm_s <= sleeve(g.length)))
+        return keep & (y >= r.hip_y - 0.02) if dress else keep  # a dress's skirt is a flared surface
+    return region
+
+
+def _bottom(reach: Callable[[float], float]):
+    """Below the waist, the legs to ``reach(length)`` (0 hip .. 1 ankle)."""
+    def region(g, r, v):
+        torso, legs = r.group == "torso", np.isin(r.group, ["upperleg", "lowerleg"])
+        return ((torso & (v[:, 1] <= r.waist_y)) | (legs & (r.leg_s <= reach(g.length)))) & (v[:, 1] <= r.waist_y)
+    return region
+
+
+def _feet(g, r, v):
+    """The feet and, by ``length``, the ankles."""
+    return (r.group == "foot") | ((r.group == "lowerleg") & (r.leg_s >= 1.0 - 0.08 * g.length))
+
+
+@dataclass(frozen=True)
+class GarmentKind:
+    """Everything a garment kind is. ``shape``: ``shell`` (the region offset from the body),
+    ``flare`` (a skirt surface from the waist), ``shell+flare`` (a dress: bodice + skirt) or
+    ``hull`` (convex hull of the region, for shoes). ``order``: dressing order, lower goes on
+    first and higher kinds sit outside it (shoes are separate)."""
+
+    layer: Layer
+    offset: float                 # base offset from the body surface, metres
+    order: int
+    shape: str
+    region: Callable | None       # (params, BodyRegions, vertices) -> keep mask
+    length: tuple[float, float]   # sampled length range
+    ease: tuple[float, float] = (0.0, 0.015)
+    thickness: tuple[float, float] = (0.002, 0.006)
+
+
+# One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
+GARMENTS: dict[str, GarmentKind] = {
+    "tshirt": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.15 + 0.25 * L), (0.2, 0.7)),
+    "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8)),
+    "jacket": GarmentKind(Layer.TOP, 0.03, 3, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
+                          (0.005, 0.03), (0.002, 0.01)),
+    "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45)),
+    "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0)),
+    "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03)),
+    "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
+                         (0.005, 0.03)),
+    "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8)),
+}
+KINDS = tuple(GARMENTS)
+# outfits sample_subject draws from (a jacket and shoes are added by chance)
+OUTFITS = (("tshirt", "trousers"), ("tshirt", "shorts"), ("longsleeve", "trousers"), ("tshirt", "skirt"),
+           ("longsleeve", "skirt"), ("dress",), ("longsleeve", "shorts"))
+
+
 @dataclass
-class GarmentParams:
-    kind: str = "tshirt"
-    size: float = 0.5
-    ease: float = 0.01
-    length: float = 0.5
-    thickness: float = 0.003
-    texture: GarmentTextureParams = field(default_factory=GarmentTextureParams)
-
-    def validate(self, where: str = "garment") -> None:
-        _check(where, "kind", self.kind, choices=KINDS)
-        _check(where, "size", self.size, 0, 1)
-        _check(where, "ease", self.ease, 0, 0.06)
-        _check(where, "length", self.length, 0, 1)
-        _check(where, "thickness", self.thickness, 0.0005, 0.02)
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["texture"] = self.texture.to_dict()
-        return d
-
-    @classmethod
-    def from_dict(cls, d: dict, where: str = "garment") -> "GarmentParams":
-        allowed = {"kind", "size", "ease", "length", "thickness", "texture"}
-        for k in d:
-            if k not in allowed:
-                raise ConfigError(f"{where}.{k}", d[k], f"unknown field; fields: {', '.join(sorted(allowed))}")
-        tex = GarmentTextureParams.from_dict(d.get("texture", {}), f"{where}.texture")
-        g = cls(**{k: v for k, v in d.items() if k != "texture"}, texture=tex)
-        g.validate(where)
-        return g
+class GarmentParams(Params):
+    kind: str = spec("tshirt", Choice(GARMENTS))
+    size: float = spec(0.5, Number(0, 1), doc="S..XL as 0..1")
+    ease: float = spec(0.01, Number(0, 0.06), doc="looseness, metres")
+    length: float = spec(0.5, Number(0, 1), doc="along the kind's range")
+    thickness: float = spec(0.003, Number(0.0005, 0.02), doc="metres")
+    texture: GarmentTextureParams = spec(factory=GarmentTextureParams, check=Nested(GarmentTextureParams))
 
 
 def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
     from synmitsuba.body.textures import sample_garment_texture
-    length = {"tshirt": (0.2, 0.7), "longsleeve": (0.3, 0.8), "jacket": (0.4, 1.0), "shorts": (0.1, 0.45),
-              "trousers": (0.85, 1.0), "skirt": (0.2, 0.8), "dress": (0.3, 0.9), "shoes": (0.2, 0.8)}[kind]
-    ease = (0.005, 0.03) if kind in ("jacket", "skirt", "dress") else (0.0, 0.015)
-    return GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*ease)), 4),
-                         length=round(float(rng.uniform(*length)), 3),
-                         thickness=round(float(rng.uniform(0.002, 0.006 if kind != "jacket" else 0.01)), 4),
-                         texture=sample_garment_texture(rng))
+    k = GARMENTS[kind]
+    return GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*k.ease)), 4),
+                         length=round(float(rng.uniform(*k.length)), 3),
+                         thickness=round(float(rng.uniform(*k.thickness)), 4), texture=sample_garment_texture(rng))
 
 
 @dataclass
@@ -114,29 +147,6 @@ def body_regions(body) -> BodyRegions:
                        crotch_y=hip_y - 0.07, neck_y=float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01)
 
 
-def _region(kind: str, g: GarmentParams, r: BodyRegions, v: np.ndarray) -> np.ndarray:
-    y = v[:, 1]
-    torso, legs = r.group == "torso", np.isin(r.group, ["upperleg", "lowerleg"])
-    arms = np.isin(r.group, ["upperarm", "lowerarm"])
-    if kind in ("tshirt", "longsleeve", "jacket", "dress"):
-        hem = r.waist_y - (r.waist_y - (r.crotch_y - 0.12)) * (g.length if kind != "dress" else 0.6)
-        sleeve = {"tshirt": 0.15 + 0.25 * g.length, "longsleeve": 0.85 + 0.1 * g.length,
-                  "jacket": 0.9 + 0.08 * g.length, "dress": 0.2 * g.length}[kind]
-        keep = ((torso | legs) & (y >= hem) & (y <= r.neck_y)) | (arms & (r.arm_s <= sleeve))
-        if kind == "dress":
-            keep &= y >= r.hip_y - 0.02  # the skirt part is a separate flared surface
-        return keep
-    if kind in ("shorts", "trousers"):
-        reach = {"shorts": 0.1 + 0.35 * g.length, "trousers": 0.75 + 0.27 * g.length}[kind]
-        return ((torso & (y <= r.waist_y)) | (legs & (r.leg_s <= reach))) & (y <= r.waist_y)
-    if kind == "skirt":
-        return torso & (y <= r.waist_y) & (y >= r.hip_y - 0.02)
-    if kind == "shoes":
-        ankle = r.group == "lowerleg"
-        return (r.group == "foot") | (ankle & (r.leg_s >= 1.0 - 0.08 * g.length))
-    raise ConfigError("garment.kind", kind, f"use one of {', '.join(KINDS)}")
-
-
 def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, n_seg: int = 48):
     """A skirt surface from top_y down, flaring outwards, outside every body vertex it passes."""
     v = body.vertices[np.isin(r.group, ["torso", "upperleg", "lowerleg"])]  # not the hanging arms
@@ -172,7 +182,7 @@ def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
     """Each shoe is the convex hull of its foot (and ankle, by ``length``), grown by ``offset``
     and subdivided; a convex shell cannot cut into the toes. UVs by cylindrical projection."""
     import trimesh
-    keep = _region("shoes", g, r, body.vertices)
+    keep = GARMENTS["shoes"].region(g, r, body.vertices)
     parts = []
     for side in (1, -1):
         pts = body.vertices[keep & (np.sign(body.vertices[:, 0]) == side)]
@@ -197,9 +207,7 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
         if not bad.any():
             break
         closest, tri, _ = closest_points(body.vertices, body.faces, p[bad])
-        tv = body.vertices[body.faces[tri]]
-        n = np.cross(tv[:, 1] - tv[:, 0], tv[:, 2] - tv[:, 0])
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        n = face_normals(body.vertices[body.faces[tri]])
         p[bad] = closest + n * clearance * 1.5
     return p
 
@@ -217,26 +225,27 @@ class GarmentMesh:
 def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
     size = 0.7 + 0.6 * g.size
     fit = 0.004 * g.size  # a larger size sits further out even with no ease
-    return max(BASE_OFFSET[g.kind] + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
+    return max(GARMENTS[g.kind].offset + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
 
 
 def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0) -> GarmentMesh:
     """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology."""
+    kind = GARMENTS[g.kind]
     offset = garment_offset(g, below)
-    if g.kind == "skirt":
+    if kind.shape == "flare":
         v, f, uv = _flare(body, r, g, offset, r.waist_y)
-    elif g.kind == "shoes":
+    elif kind.shape == "hull":
         v, f, uv = _shoes(body, r, g, offset)
     else:
-        keep = _region(g.kind, g, r, body.vertices)
+        keep = kind.region(g, r, body.vertices)
         keep_split = keep[split.source]
         used, f = submesh(split.faces, keep_split)
         src = split.source[used]
         v = body.vertices[src] + r.normals[src] * offset
         uv = split.uv[used]
-        if g.kind == "dress":
+        if kind.shape == "shell+flare":
             sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
             f = np.concatenate([f, sf + len(v)])
             v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
     v = push_out(body, v)
-    return GarmentMesh(g, v, f, uv, int(LAYER[g.kind]), offset)
+    return GarmentMesh(g, v, f, uv, int(kind.layer), offset)

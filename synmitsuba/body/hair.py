@@ -7,13 +7,12 @@ proxy ellipsoid so they never enter the head. Strands are rigid with the head bo
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.body.params import check as _check
-from synmitsuba.body.params import from_dict as _from_dict
-from synmitsuba.errors import ConfigError
+from synmitsuba.schema import Choice, Number, Params, spec
+from synmitsuba.geometry import frame, triangle_areas
 
 REGIONS = ("fringe", "top", "temporal", "occipital", "lower_back", "beard")
 # style -> length (m) per scalp region (fringe, top, temporal, occipital, lower_back), gravity, volume
@@ -33,30 +32,15 @@ BEARDS = {"none": 0.0, "stubble": 0.004, "goatee": 0.025, "mustache": 0.015, "fu
 
 
 @dataclass
-class HairParams:
-    style: str = "short"
-    beard: str = "none"
-    length: float = 1.0        # multiplies the style's lengths
-    curliness: float = 0.2     # 0 straight .. 1 tight curls
-    density: float = 0.5       # 0..1 -> strand count
-    melanin: float = 0.5       # 0 blond .. 1 black
-    redness: float = 0.1       # pheomelanin share
-    seed: int = 0
-
-    def validate(self, where: str = "hair") -> None:
-        _check(where, "style", self.style, choices=tuple(STYLES))
-        _check(where, "beard", self.beard, choices=tuple(BEARDS))
-        _check(where, "length", self.length, 0.3, 2.0)
-        for name in ("curliness", "density", "melanin", "redness"):
-            _check(where, name, getattr(self, name), 0, 1)
-        _check(where, "seed", self.seed, 0, 2 ** 31)
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, d: dict, where: str = "hair") -> "HairParams":
-        return _from_dict(cls, d, where)
+class HairParams(Params):
+    style: str = spec("short", Choice(tuple(STYLES)))
+    beard: str = spec("none", Choice(tuple(BEARDS)))
+    length: float = spec(1.0, Number(0.3, 2.0), doc="multiplies the style's lengths")
+    curliness: float = spec(0.2, Number(0, 1), doc="0 straight .. 1 tight curls")
+    density: float = spec(0.5, Number(0, 1), doc="0..1 -> strand count")
+    melanin: float = spec(0.5, Number(0, 1), doc="0 blond .. 1 black")
+    redness: float = spec(0.1, Number(0, 1), doc="pheomelanin share")
+    seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
 
 def sample_hair(rng: np.random.Generator, beard_allowed: bool = True) -> HairParams:
@@ -82,11 +66,7 @@ class ScalpRegions:
 
 def scalp_regions_from_head(vertices, normals, faces, head_center, up, forward) -> ScalpRegions:
     """Label head vertices by their direction from the head centre in the head frame."""
-    up = np.asarray(up, float) / np.linalg.norm(up)
-    fwd = np.asarray(forward, float)
-    fwd = fwd - up * (fwd @ up)
-    fwd /= np.linalg.norm(fwd)
-    right = np.cross(up, fwd)
+    right, up, fwd = frame(forward, up).T
     rel = np.asarray(vertices) - head_center
     x, y, z = rel @ right, rel @ up, rel @ fwd
     elev = np.degrees(np.arctan2(y, np.hypot(x, z)))
@@ -111,10 +91,9 @@ class Strands:
     points: np.ndarray   # (N, K, 3) control points
     radius: np.ndarray   # (N, K)
     region: np.ndarray   # (N,)
-    kind: str = "bspline"
 
     def transformed(self, R: np.ndarray, t: np.ndarray) -> "Strands":
-        return Strands(self.points @ R.T + t, self.radius, self.region, self.kind)
+        return Strands(self.points @ R.T + t, self.radius, self.region)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -131,7 +110,7 @@ class Strands:
 def _sample_roots(scalp: ScalpRegions, mask_faces: np.ndarray, n: int, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     f = scalp.faces[mask_faces]
     tri = scalp.vertices[f]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    area = triangle_areas(tri)
     pick = rng.choice(len(f), n, p=area / area.sum())
     a, b = rng.random(n), rng.random(n)
     flip = a + b > 1
@@ -145,8 +124,7 @@ def _sample_roots(scalp: ScalpRegions, mask_faces: np.ndarray, n: int, rng) -> t
 def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float, hug: float | None = None) -> np.ndarray:
     """Push points out of the head proxy ellipsoid (grown by ``margin``); with ``hug``, points
     above the ears are also pulled onto the shell at most ``hug`` (relative) above it."""
-    right = np.cross(scalp.up, scalp.forward)
-    B = np.stack([right, scalp.up, scalp.forward])
+    B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     local = (p - scalp.origin) @ B.T
     r = np.linalg.norm(local / (scalp.radii + margin), axis=-1, keepdims=True)
     target = np.maximum(r, 1.0)
@@ -201,8 +179,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
     lengths = STYLES[params.style]
     gravity, volume = lengths[5], lengths[6]
     face_region = scalp.region[scalp.faces]
-    tri = scalp.vertices[scalp.faces]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    area = triangle_areas(scalp.vertices[scalp.faces])
     scalp_area = area[(face_region[:, 0] >= 0) & (face_region[:, 0] < 5) & (face_region == face_region[:, :1]).all(1)].sum()
     parts = []
     n_total = int(1500 + 3500 * params.density)
@@ -240,9 +217,4 @@ def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
 
 def hair_material(params: HairParams):
     from synmitsuba.scene.materials import Material
-    return Material(kind="hair", melanin=float(params.melanin), base_color=(0.3, 0.2, 0.1))
-
-
-def validate_style(name: str) -> None:
-    if name not in STYLES:
-        raise ConfigError("hair.style", name, f"use one of {', '.join(STYLES)}")
+    return Material(kind="hair", melanin=float(params.melanin), redness=float(params.redness))

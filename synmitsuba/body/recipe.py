@@ -3,69 +3,51 @@ gives byte-identical meshes and textures."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.body.accessories import AccessoryParams, sample_accessories
-from synmitsuba.body.anny_model import PHENOTYPES, check_phenotypes
-from synmitsuba.body.garments import GarmentParams, sample_garment
-from synmitsuba.body.hair import HairParams, sample_hair
-from synmitsuba.body.textures import SkinParams, sample_skin
+from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_accessories
+from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES
+from synmitsuba.body.garments import GARMENTS, OUTFITS, GarmentParams, sample_garment
+from synmitsuba.body.hair import STYLES, HairParams, sample_hair
+from synmitsuba.body.textures import SkinParams, sample_lab_colour, sample_skin
 from synmitsuba.errors import ConfigError
+from synmitsuba.schema import Choice, Flag, ListOf, Nested, Number, Params, from_dict, optional, spec
 
 RECIPE_VERSION = 1
-MODELS = ("anny", "smplx")
-OUTFITS = (("tshirt", "trousers"), ("tshirt", "shorts"), ("longsleeve", "trousers"), ("tshirt", "skirt"),
-           ("longsleeve", "skirt"), ("dress",), ("longsleeve", "shorts"))
+# Layered subjects are built on anny; a layered SMPL-X subject does not exist yet (the bare
+# SMPL-X body is synmitsuba.body.smplx_model.smplx_body).
+MODELS = ("anny",)
+TEXTURE_SIZES = (64, 128, 256, 512, 1024)
 
 
 @dataclass
-class SubjectRecipe:
-    model: str = "anny"
-    phenotypes: dict = field(default_factory=dict)   # anny: gender, age, muscle, weight, height, proportions
-    betas: list = field(default_factory=list)        # smplx
-    skin: SkinParams = field(default_factory=SkinParams)
-    garments: list = field(default_factory=list)     # GarmentParams, in any order
-    hair: HairParams = field(default_factory=HairParams)
-    accessories: list = field(default_factory=list)  # AccessoryParams
-    texture_size: int = 256
-    version: int = RECIPE_VERSION
+class SubjectRecipe(Params):
+    version: int = spec(RECIPE_VERSION, Choice((RECIPE_VERSION,)))
+    model: str = spec("anny", Choice(MODELS))
+    phenotypes: dict = spec(factory=dict, check=PHENOTYPE_CHECK, doc="anny: each in [0, 1]")
+    betas: list = spec(factory=list, check=ListOf(Number()), doc="reserved for SMPL-X bodies")
+    skin: SkinParams = spec(factory=SkinParams, check=Nested(SkinParams))
+    garments: list = spec(factory=list, check=ListOf(Nested(GarmentParams)), doc="GarmentParams, any order")
+    hair: HairParams = spec(factory=HairParams, check=Nested(HairParams))
+    accessories: list = spec(factory=list, check=ListOf(Nested(AccessoryParams)))
+    texture_size: int = spec(256, Choice(TEXTURE_SIZES))
 
-    def to_dict(self) -> dict:
-        return {"version": self.version, "model": self.model, "phenotypes": dict(self.phenotypes),
-                "betas": list(self.betas), "skin": self.skin.to_dict(),
-                "garments": [g.to_dict() for g in self.garments], "hair": self.hair.to_dict(),
-                "accessories": [a.to_dict() for a in self.accessories], "texture_size": self.texture_size}
+    def __post_init__(self):
+        kinds = [g.kind for g in self.garments]
+        if len(set(kinds)) != len(kinds):
+            raise ConfigError("recipe.garments", kinds, "each garment kind may appear once")
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), sort_keys=True)
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SubjectRecipe":
-        allowed = {"version", "model", "phenotypes", "betas", "skin", "garments", "hair", "accessories", "texture_size"}
-        if not isinstance(d, dict):
-            raise ConfigError("recipe", type(d).__name__, "give a mapping (a recipe's to_dict())")
-        for k in d:
-            if k not in allowed:
-                raise ConfigError(f"recipe.{k}", d[k], f"unknown field; fields: {', '.join(sorted(allowed))}")
-        if d.get("version", RECIPE_VERSION) != RECIPE_VERSION:
-            raise ConfigError("recipe.version", d.get("version"), f"this synmitsuba reads version {RECIPE_VERSION}")
-        model = d.get("model", "anny")
-        if model not in MODELS:
-            raise ConfigError("recipe.model", model, f"use one of {', '.join(MODELS)}")
-        size = d.get("texture_size", 256)
-        if size not in (64, 128, 256, 512, 1024):
-            raise ConfigError("recipe.texture_size", size, "use 64, 128, 256, 512 or 1024")
-        garments = [GarmentParams.from_dict(g, f"recipe.garments[{i}]") for i, g in enumerate(d.get("garments", []))]
-        kinds = [g.kind for g in garments]
-        if len(set(kinds)) != len(kinds):
-            raise ConfigError("recipe.garments", kinds, "each garment kind may appear once")
-        return cls(model=model, phenotypes=_phenotypes(d.get("phenotypes", {})), betas=list(d.get("betas", [])),
-                   skin=SkinParams.from_dict(d.get("skin", {}), "recipe.skin"), garments=garments,
-                   hair=HairParams.from_dict(d.get("hair", {}), "recipe.hair"),
-                   accessories=[AccessoryParams.from_dict(a, f"recipe.accessories[{i}]")
-                                for i, a in enumerate(d.get("accessories", []))], texture_size=size)
+    def from_dict(cls, d: dict, where: str = "recipe") -> "SubjectRecipe":
+        if isinstance(d, dict) and d.get("model") == "smplx":
+            raise ConfigError(f"{where}.model", "smplx", "layered subjects need the anny body (model: anny); for a bare "
+                              "SMPL-X body use synmitsuba.body.smplx_model.smplx_body with your own model files")
+        return from_dict(cls, d, where)
 
     @classmethod
     def from_json(cls, text: str) -> "SubjectRecipe":
@@ -75,44 +57,41 @@ class SubjectRecipe:
             raise ConfigError("recipe", text[:40], f"not JSON: {exc}") from None
 
 
-def _phenotypes(d: dict) -> dict:
-    try:
-        return check_phenotypes(d)
-    except ConfigError as exc:
-        raise ConfigError("recipe." + exc.field.split(".", 1)[1], exc.value, exc.fix) from None
+@dataclass
+class SubjectConfig(Params):
+    """What ``sample_subject`` may fix; everything else is sampled."""
+
+    phenotypes: dict = spec(factory=dict, check=PHENOTYPE_CHECK, doc="partial anny phenotypes")
+    outfit: list | None = spec(None, optional(ListOf(Choice(GARMENTS), 1)), doc="garment kinds")
+    jacket: bool | None = spec(None, optional(Flag()))
+    shoes: bool | None = spec(None, optional(Flag()))
+    hair_style: str | None = spec(None, optional(Choice(tuple(STYLES))))
+    accessories: list | None = spec(None, optional(ListOf(Choice(BUILDERS))))
+    texture_size: int = spec(256, Choice(TEXTURE_SIZES))
 
 
-def sample_subject(rng: np.random.Generator, config: dict | None = None) -> SubjectRecipe:
-    """A random layered human. ``config`` may fix: ``phenotypes`` (partial), ``outfit`` (list of
-    garment kinds), ``jacket`` (bool), ``shoes`` (bool), ``hair_style``, ``accessories`` (list of
-    kinds), ``texture_size``."""
-    config = dict(config or {})
-    allowed = {"phenotypes", "outfit", "jacket", "shoes", "hair_style", "accessories", "texture_size"}
-    for k in config:
-        if k not in allowed:
-            raise ConfigError(f"config.{k}", config[k], f"unknown key; keys: {', '.join(sorted(allowed))}")
+def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None = None) -> SubjectRecipe:
+    """A random layered human. ``config`` (a ``SubjectConfig`` or its dict) may fix:
+    ``phenotypes`` (partial), ``outfit`` (garment kinds), ``jacket``, ``shoes``, ``hair_style``,
+    ``accessories`` (kinds), ``texture_size``."""
+    cfg = config if isinstance(config, SubjectConfig) else SubjectConfig.from_dict(config or {}, "config")
     pheno = {k: round(float(v), 4) for k, v in zip(PHENOTYPES, rng.uniform(0, 1, len(PHENOTYPES)))}
     pheno["age"] = round(float(rng.uniform(0.45, 1.0)), 4)  # adults
-    pheno.update(check_phenotypes(config.get("phenotypes", {})))
-    outfit = list(config.get("outfit") or OUTFITS[int(rng.integers(len(OUTFITS)))])
-    if config.get("jacket", rng.random() < 0.25) and "dress" not in outfit:
+    pheno.update(cfg.phenotypes)
+    outfit = list(cfg.outfit or OUTFITS[int(rng.integers(len(OUTFITS)))])
+    draw = rng.random() < 0.25  # drawn even when fixed, so fixing one choice keeps the others
+    if (draw if cfg.jacket is None else cfg.jacket) and "dress" not in outfit and "jacket" not in outfit:
         outfit.append("jacket")
-    if config.get("shoes", rng.random() < 0.85):
+    draw = rng.random() < 0.85
+    if (draw if cfg.shoes is None else cfg.shoes) and "shoes" not in outfit:
         outfit.append("shoes")
     garments = [sample_garment(k, rng) for k in outfit]
-    for g in garments:
-        g.validate(f"config.outfit[{g.kind}]")
     hair = sample_hair(rng, beard_allowed=pheno["gender"] > 0.5)
-    if "hair_style" in config:
-        hair.style = config["hair_style"]
-        hair.validate("config")
+    if cfg.hair_style is not None:
+        hair.style = cfg.hair_style
     accessories = sample_accessories(rng)
-    if "accessories" in config:
-        from synmitsuba.body.accessories import AccessoryParams
-        from synmitsuba.body.textures import sample_lab_colour
-        accessories = [AccessoryParams(k, sample_lab_colour(rng, (10, 80))) for k in config["accessories"]]
-        for a in accessories:
-            a.validate("config.accessories")
+    if cfg.accessories is not None:
+        accessories = [AccessoryParams(k, sample_lab_colour(rng, (10, 80))) for k in cfg.accessories]
     recipe = SubjectRecipe(phenotypes=pheno, skin=sample_skin(rng), garments=garments, hair=hair,
-                           accessories=accessories, texture_size=config.get("texture_size", 256))
+                           accessories=accessories, texture_size=cfg.texture_size)
     return SubjectRecipe.from_dict(json.loads(recipe.to_json()))  # normalised exactly as it will be read back

@@ -14,6 +14,13 @@ from synmitsuba.body.anny_model import BodyMesh
 from synmitsuba.body.skeleton import Skeleton
 from synmitsuba.errors import ConfigError
 
+_BODY = ("pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2", "left_ankle",
+         "right_ankle", "spine3", "left_foot", "right_foot", "neck", "left_collar", "right_collar", "head",
+         "left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist",
+         "jaw", "left_eye_smplhf", "right_eye_smplhf")
+FINGERS = tuple(f"{f}{k}" for f in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3))
+# SMPL-X joint order (body, then left and right hand); AMASS motions use it too
+SMPLX_JOINT_NAMES = _BODY + tuple(f"left_{f}" for f in FINGERS) + tuple(f"right_{f}" for f in FINGERS)
 REQUIRED = ("v_template", "f", "shapedirs", "J_regressor", "weights", "kintree_table")
 
 
@@ -31,7 +38,6 @@ def find_model(path: str | None = None, gender: str = "neutral") -> str:
 
 def smplx_body(betas=None, path: str | None = None, gender: str = "neutral") -> BodyMesh:
     """The SMPL-X body shaped by ``betas``, y up (SMPL-X's own frame), soles on y = 0."""
-    from synmitsuba.motion_names import SMPLX_JOINT_NAMES
     data = np.load(find_model(path, gender), allow_pickle=True)
     missing = [k for k in REQUIRED if k not in data]
     if missing:

@@ -9,17 +9,16 @@ import numpy as np
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
-from synmitsuba.body.garments import BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
+from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
 from synmitsuba.body.hair import Strands, grow_hair, hair_material, scalp_regions_from_head
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.textures import garment_material, lab_to_linear_rgb, skin_material
-from synmitsuba.body.topology import split_at_seams, vertex_normals
+from synmitsuba.body.topology import split_at_seams
 from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import vertex_normals
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.materials import Material
-
-ORDER = {"shoes": 0, "shorts": 1, "trousers": 1, "skirt": 1, "tshirt": 2, "longsleeve": 2, "dress": 2, "jacket": 3}
 
 
 @dataclass
@@ -74,7 +73,7 @@ class LayeredHuman:
                                          body.weights[self.split.source])]
         self.garments: list[GarmentMesh] = []
         below = 0.0
-        for g in sorted(recipe.garments, key=lambda g: ORDER[g.kind]):
+        for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
             m = build_garment(body, self.regions, self.split, g, below if g.kind != "shoes" else 0.0)
             if g.kind != "shoes":
                 below = max(below, m.offset)
@@ -158,9 +157,10 @@ class LayeredHuman:
             name = f"{prefix}_{layer.name}"
             if layer.is_curves:
                 if name in scene.curves:
-                    scene.remove(name)
-                scene.add_curves(name, layer.points, layer.radius, material=layer.material, instance=instance,
-                                 layer=layer.layer)
+                    scene.update_curves(name, layer.points)
+                else:
+                    scene.add_curves(name, layer.points, layer.radius, material=layer.material, instance=instance,
+                                     layer=layer.layer)
             elif name in scene.meshes:
                 scene.update_mesh(name, layer.vertices)
             else:

@@ -8,14 +8,13 @@ deterministic in the parameters (noise is seeded by a seed stored in them).
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from synmitsuba._colour import import_colour
-from synmitsuba.body.params import check as _check
-from synmitsuba.body.params import from_dict as _from_dict
 from synmitsuba.errors import ConfigError
+from synmitsuba.schema import Check, Choice, Number, Params, Vector, spec
 
 PATTERNS = ("none", "stripes", "checks", "plaid", "dots", "camouflage", "gradient")
 DECALS = ("none", "circle", "star", "band", "number")
@@ -30,11 +29,6 @@ def lab_to_linear_rgb(lab) -> np.ndarray:
     return np.clip(rgb, 0.0, 1.0)
 
 
-def linear_rgb_to_lab(rgb) -> np.ndarray:
-    colour = import_colour()
-    return colour.XYZ_to_Lab(colour.RGB_to_XYZ(np.asarray(rgb, dtype=np.float64), "sRGB", apply_cctf_decoding=False))
-
-
 def sample_lab_colour(rng: np.random.Generator, l_range=(20, 85), chroma=(5, 70)) -> list[float]:
     L = rng.uniform(*l_range)
     c = rng.uniform(*chroma)
@@ -42,55 +36,38 @@ def sample_lab_colour(rng: np.random.Generator, l_range=(20, 85), chroma=(5, 70)
     return [round(float(L), 3), round(float(c * np.cos(h)), 3), round(float(c * np.sin(h)), 3)]
 
 
-def _check_lab(where: str, name: str, value):
-    if not (isinstance(value, (list, tuple)) and len(value) == 3 and 0 <= value[0] <= 100
-            and all(isinstance(x, (int, float)) and -128 <= x <= 128 for x in value)):
-        raise ConfigError(f"{where}.{name}", value, "give a CIELAB colour [L* in 0..100, a*, b* in -128..128]")
+class _Lab(Check):
+    """A CIELAB colour [L* in 0..100, a*, b* in -128..128]."""
+
+    def __call__(self, where: str, value):
+        lab = Vector(3, -128, 128)(where, value) if isinstance(value, (list, tuple)) else None
+        if lab is None or not 0 <= lab[0] <= 100:
+            raise ConfigError(where, value, "give a CIELAB colour [L* in 0..100, a*, b* in -128..128]")
+        return lab
+
+
+LAB = _Lab()
 
 
 @dataclass
-class GarmentTextureParams:
-    base_lab: list = field(default_factory=lambda: [50.0, 0.0, 0.0])
-    pattern: str = "none"
-    pattern_lab: list = field(default_factory=lambda: [20.0, 0.0, 0.0])
-    pattern_scale: float = 8.0      # repeats across the UV square
-    pattern_width: float = 0.3      # fraction of a period covered by the pattern colour
-    pattern_alpha: float = 1.0
-    decal: str = "none"
-    decal_lab: list = field(default_factory=lambda: [90.0, 0.0, 0.0])
-    decal_center: list = field(default_factory=lambda: [0.5, 0.5])
-    decal_size: float = 0.15
-    bump: str = "none"
-    bump_amplitude: float = 0.5
-    bump_scale: float = 40.0
-    uv_scale: float = 1.0
-    uv_rotation_deg: float = 0.0
-    uv_offset: list = field(default_factory=lambda: [0.0, 0.0])
-    seed: int = 0
-
-    def validate(self, where: str = "texture") -> None:
-        _check_lab(where, "base_lab", self.base_lab)
-        _check_lab(where, "pattern_lab", self.pattern_lab)
-        _check_lab(where, "decal_lab", self.decal_lab)
-        _check(where, "pattern", self.pattern, choices=PATTERNS)
-        _check(where, "decal", self.decal, choices=DECALS)
-        _check(where, "bump", self.bump, choices=BUMPS)
-        _check(where, "pattern_scale", self.pattern_scale, 1, 64)
-        _check(where, "pattern_width", self.pattern_width, 0.05, 0.95)
-        _check(where, "pattern_alpha", self.pattern_alpha, 0, 1)
-        _check(where, "decal_size", self.decal_size, 0.02, 0.5)
-        _check(where, "bump_amplitude", self.bump_amplitude, 0, 1)
-        _check(where, "bump_scale", self.bump_scale, 2, 200)
-        _check(where, "uv_scale", self.uv_scale, 0.1, 10)
-        _check(where, "uv_rotation_deg", self.uv_rotation_deg, -180, 180)
-        _check(where, "seed", self.seed, 0, 2 ** 31)
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, d: dict, where: str = "texture") -> "GarmentTextureParams":
-        return _from_dict(cls, d, where)
+class GarmentTextureParams(Params):
+    base_lab: list = spec(factory=lambda: [50.0, 0.0, 0.0], check=LAB)
+    pattern: str = spec("none", Choice(PATTERNS))
+    pattern_lab: list = spec(factory=lambda: [20.0, 0.0, 0.0], check=LAB)
+    pattern_scale: float = spec(8.0, Number(1, 64), doc="repeats across the UV square")
+    pattern_width: float = spec(0.3, Number(0.05, 0.95), doc="fraction of a period in the pattern colour")
+    pattern_alpha: float = spec(1.0, Number(0, 1))
+    decal: str = spec("none", Choice(DECALS))
+    decal_lab: list = spec(factory=lambda: [90.0, 0.0, 0.0], check=LAB)
+    decal_center: list = spec(factory=lambda: [0.5, 0.5], check=Vector(2, 0, 1, "uv"))
+    decal_size: float = spec(0.15, Number(0.02, 0.5))
+    bump: str = spec("none", Choice(BUMPS))
+    bump_amplitude: float = spec(0.5, Number(0, 1))
+    bump_scale: float = spec(40.0, Number(2, 200))
+    uv_scale: float = spec(1.0, Number(0.1, 10))
+    uv_rotation_deg: float = spec(0.0, Number(-180, 180))
+    uv_offset: list = spec(factory=lambda: [0.0, 0.0], check=Vector(2, -10, 10, "uv"))
+    seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
 
 def sample_garment_texture(rng: np.random.Generator) -> GarmentTextureParams:
@@ -208,29 +185,15 @@ def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float 
 
 # -- skin ------------------------------------------------------------------------------
 @dataclass
-class SkinParams:
-    ita_deg: float = 30.0         # individual typology angle: 65 very light .. -60 very dark
-    hue_deg: float = 55.0         # angle of (a*, b*): 35 reddish .. 75 yellowish
-    lip_darkening: float = 0.25   # 0..1
-    lip_redness: float = 0.4
-    freckles: float = 0.0         # density 0..1 (face only)
-    blush: float = 0.1            # 0..1 (cheeks)
-    nail_lightening: float = 0.3
-    seed: int = 0
-
-    def validate(self, where: str = "skin") -> None:
-        _check(where, "ita_deg", self.ita_deg, *ITA_RANGE)
-        _check(where, "hue_deg", self.hue_deg, 20, 90)
-        for name in ("lip_darkening", "lip_redness", "freckles", "blush", "nail_lightening"):
-            _check(where, name, getattr(self, name), 0, 1)
-        _check(where, "seed", self.seed, 0, 2 ** 31)
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, d: dict, where: str = "skin") -> "SkinParams":
-        return _from_dict(cls, d, where)
+class SkinParams(Params):
+    ita_deg: float = spec(30.0, Number(*ITA_RANGE), doc="individual typology angle: 65 very light .. -60 very dark")
+    hue_deg: float = spec(55.0, Number(20, 90), doc="angle of (a*, b*): 35 reddish .. 75 yellowish")
+    lip_darkening: float = spec(0.25, Number(0, 1))
+    lip_redness: float = spec(0.4, Number(0, 1))
+    freckles: float = spec(0.0, Number(0, 1), doc="density (face only)")
+    blush: float = spec(0.1, Number(0, 1), doc="cheeks")
+    nail_lightening: float = spec(0.3, Number(0, 1))
+    seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
     def lab(self) -> np.ndarray:
         """CIELAB skin tone: L* from ITA along a measured-skin trend, b* so that ITA holds."""

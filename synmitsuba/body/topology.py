@@ -19,15 +19,6 @@ def split_at_seams(faces: np.ndarray, face_uv: np.ndarray, uv: np.ndarray) -> Sp
     return SplitMesh(unique[:, 0], uv[unique[:, 1]], inverse.reshape(-1, 3))
 
 
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted vertex normals."""
-    fn = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]])
-    n = np.zeros_like(vertices)
-    for k in range(3):
-        np.add.at(n, faces[:, k], fn)
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-
-
 def submesh(faces: np.ndarray, keep_vertex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Faces whose three vertices are kept, re-indexed; returns (vertex indices, faces)."""
     f = faces[keep_vertex[faces].all(1)]

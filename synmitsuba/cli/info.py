@@ -29,6 +29,7 @@ def run(args) -> int:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("info", help="print versions, the variant and the libLLVM in use")
-    p.add_argument("--variant", help="variant to report on (default llvm_ad_rgb)")
+    p = sub.add_parser("info", help="print versions, the variant and the libLLVM in use",
+                       description="Print versions, the Mitsuba variant, the libLLVM and the thread count in use.")
+    p.add_argument("--variant", help="variant to report on (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
     p.set_defaults(func=run)

@@ -1,8 +1,7 @@
 """``synmitsuba motion preview CLIP --out DIR``: a strip of frames of a clip.
 
 CLIP is a procedural kind (``walk``, ``run``, ...), a BVH file or an AMASS npz. The motion is
-retargeted onto a sampled subject when the layered human is available, else shown as a stick
-figure on the humanoid skeleton.
+retargeted onto a sampled subject, or shown as a stick figure (``--stick``) on its own skeleton.
 """
 from __future__ import annotations
 
@@ -10,72 +9,66 @@ import os
 
 import numpy as np
 
-
-def load_clip(clip: str, rng: np.random.Generator, seconds: float):
-    import synmitsuba as sm
-    if clip in sm.MOTION_KINDS:
-        return sm.procedural_motion(clip, rng, seconds=seconds)
-    if clip.lower().endswith(".bvh"):
-        return sm.load_bvh(clip)
-    if clip.lower().endswith(".npz"):
-        return sm.load_amass(clip)
-    raise sm.ConfigError("CLIP", clip, f"give a .bvh or .npz file or one of {', '.join(sm.MOTION_KINDS)}")
+from synmitsuba.cli.args import natural_int, output_dir, positive_float, positive_int, resolution
 
 
-def _frame_scene(sm, motion, f: int, human=None):
-    scene = sm.Scene()
-    ground = np.array([[-50, 0, -50], [50, 0, -50], [50, 0, 50], [-50, 0, 50]], float)
-    scene.add_mesh("ground", ground, np.array([[0, 2, 1], [0, 3, 2]]), material=sm.Material(base_color=0.5),
-                   layer=sm.Layer.GROUND)
-    scene.set_environment(sm.SunSky(sun_direction=(0.4, 0.8, 0.5)))
+def _figure_scene(motion, f: int, human=None):
+    from synmitsuba.compose.stage import preview_stage
+    from synmitsuba.scene import Layer, Material
+    from synmitsuba.scene.figures import stick_figure
+    scene = preview_stage(sun_direction=(0.4, 0.8, 0.5), ground=0.5, sky_scale=1.0)
     if human is not None:
-        human.add_to(scene, rotations=motion.rotations[f], root_translation=motion.root_translation[f], instance=1)
+        human.add_to(scene, *motion.frame(f), instance=1)
     else:
-        v, faces = sm.scene.figures.stick_figure(motion.joint_positions()[f], motion.skeleton.parents)
-        scene.add_mesh("figure", v, faces, material=sm.Material(base_color=(0.8, 0.45, 0.2)), instance=1,
-                       layer=sm.Layer.BODY)
+        v, faces = stick_figure(motion.joint_positions()[f], motion.skeleton.parents)
+        scene.add_mesh("figure", v, faces, material=Material(base_color=(0.8, 0.45, 0.2)), instance=1, layer=Layer.BODY)
     return scene
 
 
 def preview(args) -> int:
     import synmitsuba as sm
-    import synmitsuba.scene.figures  # noqa: F401
+    from synmitsuba.motion.sources import load_motion
+    load_motion_args = dict(rng=np.random.default_rng(args.seed), seconds=args.seconds, field="CLIP")
+    if not os.path.isfile(args.clip):  # a kind name: checked before anything heavy
+        from synmitsuba.motion.sources import motion_source_kind
+        try:
+            motion_source_kind(args.clip)
+        except sm.ConfigError as exc:
+            raise sm.ConfigError("CLIP", exc.value, exc.fix) from None
+    output_dir(args.out)
     sm.set_variant(args.variant)
-    rng = np.random.default_rng(args.seed)
-    motion = load_clip(args.clip, rng, args.seconds)
+    motion = load_motion(args.clip, **load_motion_args)
     human = None
-    if not args.stick and hasattr(sm, "build_subject"):
-        human = sm.build_subject(sm.sample_subject(rng))
+    if not args.stick:
+        human = sm.build_subject(sm.sample_subject(load_motion_args["rng"]))
         motion = sm.retarget(motion, human.skeleton)
     frames = np.linspace(0, motion.n_frames - 1, args.frames).round().astype(int)
     pelvis = motion.joint_positions()[:, 0]
     height = float(motion.skeleton.rest_positions[:, 1].max()) + 0.15
-    w, h = (int(x) for x in args.res.split("x"))
     images = []
     for f in frames:
-        scene = _frame_scene(sm, motion, f, human)
         centre = np.array([pelvis[f, 0], 0.5 * height, pelvis[f, 2]])  # follow the subject
         cam = sm.Camera.look_at(eye=centre + [3.6 * height / 1.8, 0.3, 1.8 * height / 1.8], target=centre,
-                                fov_y_deg=38, width=w, height=h)
-        images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=args.seed).rgb))
-    os.makedirs(args.out, exist_ok=True)
+                                fov_y_deg=38, width=args.res[0], height=args.res[1])
+        images.append(sm.to_srgb8(sm.render(_figure_scene(motion, f, human), cam, spp=args.spp, seed=args.seed).rgb))
     name = os.path.splitext(os.path.basename(args.clip))[0]
-    path = sm.write_png(os.path.join(args.out, f"{name}_strip.png"), sm.contact_sheet(images, columns=len(images)))
-    print(path)
+    print(sm.write_png(os.path.join(args.out, f"{name}_strip.png"), sm.contact_sheet(images, columns=len(images))))
     return 0
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("motion", help="motion tools")
-    msub = p.add_subparsers(dest="motion_command", metavar="SUBCOMMAND", required=True)
-    pv = msub.add_parser("preview", help="render a strip of frames of a clip")
-    pv.add_argument("clip", help="procedural kind (walk, run, ...), .bvh or AMASS .npz")
-    pv.add_argument("--out", required=True)
-    pv.add_argument("--frames", type=int, default=6)
-    pv.add_argument("--seconds", type=float, default=2.0, help="length of a procedural clip")
-    pv.add_argument("--res", default="200x260")
-    pv.add_argument("--spp", type=int, default=16)
-    pv.add_argument("--seed", type=int, default=0)
-    pv.add_argument("--variant")
+    from synmitsuba.cli import Parser
+    p = sub.add_parser("motion", help="motion tools", description="Motion tools.")
+    msub = p.add_subparsers(dest="motion_command", metavar="SUBCOMMAND", required=True, parser_class=Parser)
+    pv = msub.add_parser("preview", help="render a strip of frames of a clip",
+                         description="Render a strip of frames of a clip on a sampled subject (or a stick figure).")
+    pv.add_argument("clip", help="procedural kind (walk, run, ...), a .bvh file or an AMASS .npz")
+    pv.add_argument("--out", required=True, help="output folder (created)")
+    pv.add_argument("--frames", type=positive_int, default=6, help="frames in the strip")
+    pv.add_argument("--seconds", type=positive_float, default=2.0, help="length of a procedural clip")
+    pv.add_argument("--res", type=resolution, default=(200, 260), help="WIDTHxHEIGHT of each frame")
+    pv.add_argument("--spp", type=positive_int, default=16, help="samples per pixel")
+    pv.add_argument("--seed", type=natural_int, default=0, help="seed of the subject and of a procedural clip")
+    pv.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
     pv.add_argument("--stick", action="store_true", help="show a stick figure, not a subject")
     pv.set_defaults(func=preview)

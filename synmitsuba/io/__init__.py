@@ -1,6 +1,9 @@
-"""Writers and readers: OpenEXR samples, PNG previews, scene files."""
-from synmitsuba.io.dataset import SampleDataset, list_samples
-from synmitsuba.io.exr import read_sample, write_sample
-from synmitsuba.io.preview import contact_sheet, to_srgb8, write_png
+"""Writers and readers of samples: OpenEXR + JSON sidecar, PNG previews, the PyTorch dataset."""
+from synmitsuba._lazy import lazy_exports
 
-__all__ = ["write_sample", "read_sample", "SampleDataset", "list_samples", "to_srgb8", "write_png", "contact_sheet"]
+_EXPORTS = {"write_sample": "synmitsuba.io.exr", "read_sample": "synmitsuba.io.exr",
+            "SampleDataset": "synmitsuba.io.dataset", "list_samples": "synmitsuba.io.dataset",
+            "to_srgb8": "synmitsuba.io.preview", "write_png": "synmitsuba.io.preview",
+            "contact_sheet": "synmitsuba.io.preview"}
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

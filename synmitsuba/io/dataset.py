@@ -36,7 +36,7 @@ class SampleDataset:
     def __getitem__(self, i: int) -> dict:
         import torch
         s = read_sample(self.stems[i])
-        names = self.passes or s.PASSES
+        names = self.passes or tuple(s.passes)
         item = {}
         for name in names:
             arr = getattr(s, name)

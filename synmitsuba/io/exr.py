@@ -1,8 +1,9 @@
 """One multi-channel OpenEXR per sample (+ JSON sidecar + sRGB PNG preview), and reading back.
 
-Channels: R G B A (float32), depth.Z, normal.X/Y/Z, position.X/Y/Z, uv.U/V (float32),
-mask, instance, layer (uint32), coverage.<id> (half: soft mask of each instance). The camera (OpenCV K, R, t, size) and render settings are in
-the EXR header (``synmitsuba`` attribute, JSON) and in ``<stem>.json``. Files are written under a
+Channels come from the pass registry (``synmitsuba.sample.PASSES``): R G B A, depth.Z,
+normal.X/Y/Z, position.X/Y/Z, uv.U/V (float32); mask, uv.valid, instance, layer (uint32); plus
+coverage.<id> (half: soft mask of each instance). The camera (OpenCV K, R, t, size) and render
+settings are in the EXR header (``synmitsuba`` attribute, JSON) and in ``<stem>.json``. Files are written under a
 temporary name and renamed, so a crash never leaves a half-written sample that looks complete.
 """
 from __future__ import annotations
@@ -13,29 +14,38 @@ import os
 import numpy as np
 
 from synmitsuba.errors import ConfigError
-from synmitsuba.io.preview import to_srgb8, write_png
-from synmitsuba.render.sample import Sample
+from synmitsuba.io.preview import atomic_path, to_srgb8, write_png
+from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 
 FORMAT_VERSION = 1
-_VEC = {"normal": "XYZ", "position": "XYZ", "uv": "UV"}
+_EXR_DTYPE = {"float32": np.float32, "uint32": np.uint32, "half": np.float16}
 
 
 def _channels(sample: Sample) -> dict[str, np.ndarray]:
-    ch = {c: sample.rgb[..., i] for i, c in enumerate("RGB")}
-    ch["A"] = sample.alpha
-    ch["depth.Z"] = sample.depth
-    for name, comps in _VEC.items():
-        arr = getattr(sample, name)
-        for i, c in enumerate(comps):
-            ch[f"{name}.{c}"] = arr[..., i]
-    ch = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in ch.items()}
-    ch["mask"] = sample.mask.astype(np.uint32)
-    ch["instance"] = sample.instance.astype(np.uint32)
-    ch["layer"] = sample.layer.astype(np.uint32)
+    """EXR channels of every registered pass the sample holds (``PASSES`` order)."""
+    ch = {}
+    for name, spec in PASSES.items():
+        if name not in sample.passes:
+            continue
+        arr = np.asarray(sample.passes[name])
+        comps = [arr] if spec.components == 1 else [arr[..., i] for i in range(spec.components)]
+        for cname, comp in zip(spec.channels, comps):
+            ch[cname] = np.ascontiguousarray(comp, dtype=_EXR_DTYPE[spec.exr_type])
     for inst, frac in sample.coverage.items():  # k / samples: exact in half precision for samples <= 2048
         ch[f"coverage.{inst}"] = np.ascontiguousarray(frac, dtype=np.float16)
     return ch
+
+
+def _passes(ch: dict) -> dict[str, np.ndarray]:
+    """Registered passes back from EXR channels (a pass missing any channel is skipped)."""
+    out = {}
+    for name, spec in PASSES.items():
+        if all(c in ch for c in spec.channels):
+            comps = [ch[c] for c in spec.channels]
+            arr = comps[0] if spec.components == 1 else np.stack(comps, -1)
+            out[name] = arr.astype(spec.dtype)
+    return out
 
 
 def _sidecar(sample: Sample) -> dict:
@@ -53,16 +63,12 @@ def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, s
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "synmitsuba": json.dumps(side)}
     paths = {"exr": f"{stem}.exr", "json": f"{stem}.json"}
-    tmp = f"{stem}.tmp-{os.getpid()}.exr"
-    with OpenEXR.File(header, _channels(sample)) as f:
+    with atomic_path(paths["exr"]) as tmp, OpenEXR.File(header, _channels(sample)) as f:
         f.write(tmp)
-    os.replace(tmp, paths["exr"])
     if preview:
         paths["png"] = write_png(f"{stem}.png", to_srgb8(sample.rgb))
-    tmp = f"{stem}.json.tmp-{os.getpid()}"
-    with open(tmp, "w") as fh:
+    with atomic_path(paths["json"]) as tmp, open(tmp, "w") as fh:  # written last: it marks the sample done
         json.dump(side, fh, indent=1)
-    os.replace(tmp, paths["json"])  # the sidecar is written last: its presence marks the sample done
     return paths
 
 
@@ -76,10 +82,6 @@ def read_sample(stem: str) -> Sample:
     with OpenEXR.File(f"{stem}.exr", separate_channels=True) as f:
         ch = {k: v.pixels for k, v in f.channels().items()}
         side = json.loads(f.header()["synmitsuba"])
-    vec = {name: np.stack([ch[f"{name}.{c}"] for c in comps], -1) for name, comps in _VEC.items()}
     cov = {int(k.split(".", 1)[1]): v.astype(np.float32) for k, v in ch.items() if k.startswith("coverage.")}
-    return Sample(rgb=np.stack([ch["R"], ch["G"], ch["B"]], -1), alpha=ch["A"], depth=ch["depth.Z"],
-                  coverage=dict(sorted(cov.items())),
-                  mask=ch["mask"].astype(bool), instance=ch["instance"].astype(np.int32),
-                  layer=ch["layer"].astype(np.uint8), camera=Camera.from_dict(side["camera"]),
-                  meta=side.get("meta", {}), **vec)
+    return Sample(camera=Camera.from_dict(side["camera"]), passes=_passes(ch), coverage=dict(sorted(cov.items())),
+                  meta=side.get("meta", {}))

@@ -1,6 +1,7 @@
 """sRGB previews of linear renders (colour-science's sRGB encoding) and PNG writing."""
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
@@ -15,13 +16,26 @@ def to_srgb8(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     return np.round(colour.cctf_encoding(lin, function="sRGB") * 255.0).astype(np.uint8)
 
 
+@contextlib.contextmanager
+def atomic_path(path: str):
+    """A temporary name beside ``path`` (same extension) renamed to ``path`` when the block
+    ends cleanly, removed when it does not (an error, Ctrl-C): a file is complete or absent."""
+    root, ext = os.path.splitext(os.fspath(path))
+    tmp = f"{root}.tmp-{os.getpid()}{ext}"
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
 def write_png(path: str, image: np.ndarray) -> str:
     """Write a uint8 (H, W), (H, W, 3) or (H, W, 4) image atomically (temporary name, then rename)."""
     from PIL import Image
     path = os.fspath(path)
-    tmp = f"{path}.tmp-{os.getpid()}.png"
-    Image.fromarray(np.ascontiguousarray(image)).save(tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        Image.fromarray(np.ascontiguousarray(image)).save(tmp)
     return path
 
 

@@ -1,13 +1,13 @@
 """Motion: procedural motions, BVH/AMASS import, retargeting, clips."""
-from synmitsuba.motion.amass import load_amass, smplx_skeleton
-from synmitsuba.motion.bvh import BVHError, load_bvh, parse_bvh
-from synmitsuba.motion.humanoid import humanoid_skeleton
-from synmitsuba.motion.library import MotionLibrary, is_allowed, random_window
-from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.procedural import KINDS as MOTION_KINDS
-from synmitsuba.motion.procedural import foot_sliding, procedural_motion
-from synmitsuba.motion.retarget import retarget
+from synmitsuba._lazy import lazy_exports
 
-__all__ = ["Motion", "load_bvh", "parse_bvh", "BVHError", "load_amass", "smplx_skeleton", "procedural_motion",
-           "MOTION_KINDS", "foot_sliding", "retarget", "humanoid_skeleton", "MotionLibrary", "random_window",
-           "is_allowed"]
+_EXPORTS = {"Motion": "synmitsuba.motion.motion", "load_bvh": "synmitsuba.motion.bvh",
+            "parse_bvh": "synmitsuba.motion.bvh", "BVHError": "synmitsuba.motion.bvh",
+            "load_amass": "synmitsuba.motion.amass", "smplx_skeleton": "synmitsuba.motion.amass",
+            "procedural_motion": "synmitsuba.motion.procedural", "MOTION_KINDS": "synmitsuba.motion.procedural:KINDS",
+            "foot_sliding": "synmitsuba.motion.procedural", "retarget": "synmitsuba.motion.retargeting",
+            "humanoid_skeleton": "synmitsuba.motion.humanoid", "MotionLibrary": "synmitsuba.motion.library",
+            "random_window": "synmitsuba.motion.library", "is_allowed": "synmitsuba.motion.library",
+            "load_motion": "synmitsuba.motion.sources"}
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

@@ -12,12 +12,12 @@ import os
 import numpy as np
 
 from synmitsuba.body.skeleton import Skeleton
+from synmitsuba.body.smplx_model import FINGERS as _FINGERS
+from synmitsuba.body.smplx_model import SMPLX_JOINT_NAMES as SMPLX_JOINTS
 from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import axis_angle_to_matrix
 from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.rotations import axis_angle_to_matrix
 
-from synmitsuba.motion_names import _FINGERS
-from synmitsuba.motion_names import SMPLX_JOINT_NAMES as SMPLX_JOINTS
 _BODY_PARENTS = [-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 15, 15, 15]
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from synmitsuba.body.skeleton import Skeleton
 from synmitsuba.errors import ConfigError, SynMitsubaError
 from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.rotations import euler_to_matrix
+from synmitsuba.geometry import euler_to_matrix
 
 # metres per file unit; "auto" picks the one giving the most human-like height (~1.7 m)
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "inch": 0.0254, "cmu": 0.0254 / 0.45}
@@ -130,6 +130,11 @@ def parse_bvh(text: str, path: str = "<bvh>", units: str | float = "auto", label
             data[f, c] = tk.number()
     if tk.pos != len(tk.items):
         tk.fail(f"more data than the {int(n_frames)} frames declared")
+    bad = np.argwhere(~np.isfinite(data))
+    if len(bad):
+        f, c = bad[0]
+        names = [f"{j['name']}.{ch}" for j in joints for ch in j["channels"]]
+        raise BVHError(f"{path}: frame {f + 1}, {names[c]} is {data[f, c]}: every motion value must be a finite number")
     return _to_motion(joints, data, 1.0 / frame_time, path, units, labels)
 
 

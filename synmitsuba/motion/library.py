@@ -44,14 +44,8 @@ class LibraryEntry:
     seconds: float = 0.0
 
     def load(self, rng: np.random.Generator, seconds: float = CLIP_SECONDS) -> Motion:
-        if self.kind == "procedural":
-            from synmitsuba.motion.procedural import procedural_motion
-            return procedural_motion(self.path, rng, seconds=max(seconds, 2.0) + 0.5)
-        if self.kind == "bvh":
-            from synmitsuba.motion.bvh import load_bvh
-            return load_bvh(self.path, labels=self.labels)
-        from synmitsuba.motion.amass import load_amass
-        return load_amass(self.path, labels=self.labels)
+        from synmitsuba.motion.sources import load_motion
+        return load_motion(self.path, rng, seconds=max(seconds, 2.0) + 0.5, labels=self.labels)
 
 
 @dataclass

@@ -7,7 +7,7 @@ import numpy as np
 
 from synmitsuba.body.skeleton import Skeleton, forward_kinematics
 from synmitsuba.errors import ConfigError
-from synmitsuba.motion.rotations import matrix_to_quat, quat_to_matrix, slerp
+from synmitsuba.geometry import axis_rotation, slerp_matrices
 
 
 @dataclass
@@ -72,18 +72,12 @@ class Motion:
             return self
         n = max(1, int(np.floor((self.n_frames - 1) * fps / self.fps + 1e-9)) + 1)
         t = np.arange(n) * self.fps / fps  # fractional source frame index
-        i0 = np.minimum(np.floor(t).astype(int), self.n_frames - 1)
-        i1 = np.minimum(i0 + 1, self.n_frames - 1)
-        w = t - i0
-        q = matrix_to_quat(self.rotations)
-        qi = slerp(q[i0], q[i1], np.broadcast_to(w[:, None], (n, q.shape[1])))
-        root = self.root_translation[i0] * (1 - w)[:, None] + self.root_translation[i1] * w[:, None]
-        return replace(self, rotations=quat_to_matrix(qi), root_translation=root, fps=float(fps))
+        root = np.stack([np.interp(t, np.arange(self.n_frames), c) for c in self.root_translation.T], 1)
+        return replace(self, rotations=slerp_matrices(self.rotations, t), root_translation=root, fps=float(fps))
 
     def moved(self, yaw_deg: float = 0.0, translation=(0.0, 0.0, 0.0)) -> "Motion":
         """The motion turned by ``yaw_deg`` about the vertical axis through the origin, then
         shifted by ``translation`` (metres): how a clip is placed in a scene."""
-        from synmitsuba.motion.rotations import axis_rotation
         Ry = axis_rotation("y", np.radians(yaw_deg))
         rot = self.rotations.copy()
         roots = np.flatnonzero(self.skeleton.parents < 0)

@@ -12,7 +12,7 @@ from synmitsuba.body.skeleton import forward_kinematics
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.humanoid import FEET, humanoid_skeleton
 from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.rotations import axis_rotation
+from synmitsuba.geometry import axis_rotation
 
 D = np.radians
 # kind -> {parameter: (low, high) sampled when not given, or a tuple of choices}

@@ -1,6 +1,24 @@
-"""Rendering: variant selection, scene building, the RGB and exact geometry passes."""
-from synmitsuba.render.passes import render
-from synmitsuba.render.sample import Sample
-from synmitsuba.render.variant import current_variant, set_variant
+"""Rendering: variant selection, Mitsuba scene building, the RGB and exact geometry passes.
 
-__all__ = ["render", "Sample", "set_variant", "current_variant"]
+``synmitsuba.render`` is this package and, called, the ``render`` function
+(``sm.render(scene, camera, spp=16)``, see ``synmitsuba.render.passes.render``): one name for
+both, so ``sm.render(...)`` and ``sm.render.passes`` both work.
+"""
+import sys as _sys
+import types as _types
+
+from synmitsuba._lazy import lazy_exports
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "set_variant": "synmitsuba.render.variant", "current_variant": "synmitsuba.render.variant",
+    "exact_pass": "synmitsuba.render.passes", "Sample": "synmitsuba.sample"})
+__all__ = ["set_variant", "current_variant", "exact_pass"]
+
+
+class _CallableRenderPackage(_types.ModuleType):
+    def __call__(self, *args, **kwargs):
+        from synmitsuba.render.passes import render
+        return render(*args, **kwargs)
+
+
+_sys.modules[__name__].__class__ = _CallableRenderPackage

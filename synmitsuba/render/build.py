@@ -3,10 +3,11 @@ from __future__ import annotations
 
 import os
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from synmitsuba.geometry import frame
 from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
                                         PointLight, SunSky)
 from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
@@ -23,7 +24,7 @@ def bsdf_dict(mat: Material) -> dict:
     """Mitsuba BSDF dict for a Material."""
     color = _bitmap(mat.texture) if mat.texture is not None else {"type": "rgb", "value": list(mat.base_color)}
     if mat.kind == "hair":
-        return {"type": "hair", "eumelanin": 8.0 * mat.melanin, "pheomelanin": 0.2,
+        return {"type": "hair", "eumelanin": 8.0 * mat.melanin, "pheomelanin": 0.2 + 2.8 * mat.redness,
                 "longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3}
     if mat.kind == "principled":
         bsdf = {"type": "principled", "base_color": color, "roughness": mat.roughness,
@@ -97,41 +98,79 @@ def _light(light) -> dict:
     if isinstance(light, DirectionalLight):
         return {"type": "directional", "direction": list(light.direction),
                 "irradiance": {"type": "rgb", "value": list(light.irradiance)}}
-    if isinstance(light, AreaLight):
-        to_world = mi.ScalarTransform4f().look_at(origin=list(light.position), target=list(light.target),
-                                                  up=[0, 1, 0] if abs(np.subtract(light.target, light.position)[1])
-                                                  < 0.999 * np.linalg.norm(np.subtract(light.target, light.position))
-                                                  else [0, 0, 1]) @ mi.ScalarTransform4f().scale(
-            [light.size[0] / 2, light.size[1] / 2, 1])
-        return {"type": "rectangle", "to_world": to_world,
+    if isinstance(light, AreaLight):  # Mitsuba's rectangle spans [-1, 1]^2 in xy and faces +z
+        facing = np.subtract(light.target, light.position)
+        try:
+            F = frame(facing, [0, 1, 0], keep="forward")
+        except ValueError:  # pointing straight up or down
+            F = frame(facing, [0, 0, 1], keep="forward")
+        M = np.eye(4)
+        M[:3, :3], M[:3, 3] = F @ np.diag([light.size[0] / 2, light.size[1] / 2, 1.0]), light.position
+        return {"type": "rectangle", "to_world": mi.ScalarTransform4f(M.tolist()),
                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": list(light.radiance)}},
                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}}}
     raise TypeError(light)
 
 
+# how often a Scene was loaded into Mitsuba and updated in place (tests assert on these)
+STATS = {"loads": 0, "updates": 0}
+
+
 @dataclass
 class BuiltScene:
-    """A loaded Mitsuba scene plus what maps its shapes back to our ids."""
+    """A loaded Mitsuba scene plus per-shape tables indexed by drjit registry id (``si.shape``
+    reinterpreted as UInt32): instance id, layer id and whether the shape has texture coords."""
 
     mi_scene: object
     params: object
     versions: tuple[int, int]
-    registry_ids: np.ndarray   # sorted drjit registry ids of the scene's shapes
-    instance_of: np.ndarray    # instance id per entry of registry_ids
-    layer_of: np.ndarray       # layer id per entry of registry_ids
+    tables: dict               # name -> numpy array indexed by registry id
+    instance_ids: list         # instance ids > 0 present in the scene
+    _dr_tables: dict = field(default_factory=dict)
+
+    def lookup(self, name: str, reg, active):
+        """Per-ray table value (UInt32) for registry ids ``reg``; 0 where not ``active``."""
+        import drjit as dr
+        import mitsuba as mi
+        if name not in self._dr_tables:
+            self._dr_tables[name] = mi.UInt32(self.tables[name].astype(np.uint32))
+        return dr.gather(mi.UInt32, self._dr_tables[name], reg, active)
+
+
+def _update_in_place(cached: BuiltScene, scene: Scene) -> None:
+    import mitsuba as mi
+    for name, m in scene.meshes.items():
+        cached.params[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
+    for name, c in scene.curves.items():
+        rows = np.concatenate([c.points, c.radius[..., None]], -1).astype(np.float32)
+        cached.params[f"{name}.control_points"] = mi.Float(rows.ravel())
+    cached.params.update()
+    cached.versions = (scene.structure_version, scene.geometry_version)
+    STATS["updates"] += 1
+
+
+def _tables(mi_scene, scene: Scene) -> tuple[dict, list]:
+    import drjit as dr
+    import mitsuba as mi
+    shapes = {**{n: (m.instance, m.layer, m.uv is not None) for n, m in scene.meshes.items()},
+              **{n: (c.instance, c.layer, False) for n, c in scene.curves.items()}}
+    reg = dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr()).numpy() if mi_scene.shapes() else np.zeros(0, np.uint32)
+    size = int(reg.max()) + 1 if len(reg) else 1
+    tables = {k: np.zeros(size, np.uint32) for k in ("instance", "layer", "has_uv")}
+    for r, shape in zip(reg, mi_scene.shapes()):
+        inst, lay, has_uv = shapes.get(shape.id(), (0, 0, False))  # emitters' rectangles get (0, 0)
+        tables["instance"][r], tables["layer"][r], tables["has_uv"][r] = inst, lay, has_uv
+    return tables, sorted({v[0] for v in shapes.values() if v[0] > 0})
 
 
 def build(scene: Scene) -> BuiltScene:
-    """Load ``scene`` into Mitsuba, or reuse/update the cached load."""
-    import drjit as dr
+    """Load ``scene`` into Mitsuba, or reuse the cached load, moving meshes and curves in place
+    when only positions changed (no reload, compiled kernels reused)."""
     import mitsuba as mi
     cached: BuiltScene | None = getattr(scene, "_built", None)
     if cached is not None and cached.versions[0] == scene.structure_version:
         if cached.versions[1] != scene.geometry_version:
-            for name, m in scene.meshes.items():
-                cached.params[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
-            cached.params.update()
-            cached.versions = (scene.structure_version, scene.geometry_version)
+            _update_in_place(cached, scene)
         return cached
     d: dict = {"type": "scene"}
     for name, m in scene.meshes.items():
@@ -144,15 +183,8 @@ def build(scene: Scene) -> BuiltScene:
     for i, light in enumerate(scene.lights):
         d[f"light_{i}"] = _light(light)
     mi_scene = mi.load_dict(d)
-    ids = {**{n: (m.instance, m.layer) for n, m in scene.meshes.items()},
-           **{n: (c.instance, c.layer) for n, c in scene.curves.items()}}
-    reg = dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr()).numpy() if mi_scene.shapes() else np.zeros(0, np.uint32)
-    inst = np.zeros(len(reg), np.int32)
-    lay = np.zeros(len(reg), np.uint8)
-    for k, shape in enumerate(mi_scene.shapes()):
-        inst[k], lay[k] = ids.get(shape.id(), (0, 0))  # emitters' rectangles get (0, 0)
-    order = np.argsort(reg)
-    built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version),
-                       reg[order], inst[order], lay[order])
+    tables, ids = _tables(mi_scene, scene)
+    built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids)
     scene._built = built
+    STATS["loads"] += 1
     return built

@@ -9,14 +9,17 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-from synmitsuba.errors import ConfigError
+from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.render import sensor as sensor_mod
 from synmitsuba.render.build import build
-from synmitsuba.render.sample import Sample
 from synmitsuba.render.variant import current_variant
+from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
 
@@ -48,6 +51,10 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     coverage_samples = _check_int("coverage_samples", coverage_samples, 1)
     if not isinstance(camera, Camera):
         raise ConfigError("camera", type(camera).__name__, "give a synmitsuba.Camera")
+    if scene.environment is None and not scene.lights:
+        warnings.warn(SynMitsubaWarning("the scene has no environment and no light: the RGB is black; add one "
+                                        "with scene.set_environment(sm.SunSky()) or scene.add_light(...)"),
+                      stacklevel=2)
     variant = current_variant()
     sensor_mod.register(variant)
     t0 = time.perf_counter()
@@ -61,14 +68,26 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed)
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
-            "variant": variant, "rfilter": rfilter,
-            "seconds": {"build": t1 - t0, "rgb": t2 - t1, "exact": t3 - t2}}
-    return Sample(rgb=rgb, camera=camera, meta=meta, **passes)
+            "variant": variant, "rfilter": rfilter}
+    timings = {"build": t1 - t0, "rgb": t2 - t1, "exact": t3 - t2}
+    cov = passes.pop("coverage")
+    if not passes["mask"].any():
+        warnings.warn(SynMitsubaWarning("the camera sees no geometry: every pixel is background; check the "
+                                        "camera's position, target and field of view"), stacklevel=2)
+    return Sample(camera=camera, passes={"rgb": rgb, **passes}, coverage=cov, meta=meta, timings=timings)
+
+
+def strata(n: int) -> tuple[int, int]:
+    """(rows, columns) of sub-pixel strata for ``n`` rays: rows x columns == n exactly, as
+    square as n allows (a prime n gives 1 x n strips), so the strata tile the whole pixel and
+    a jittered ray in each gives an unbiased coverage estimate for any n."""
+    rows = max(d for d in range(1, int(math.isqrt(n)) + 1) if n % d == 0)
+    return rows, n // rows
 
 
 def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None):
     """World rays built inside drjit: ``per_pixel`` rays per pixel, through the pixel centre
-    (``seed`` None) or at stratified jittered positions (a side x side grid, seeded PCG32).
+    (``seed`` None) or one jittered ray in each of ``strata(per_pixel)`` strata (seeded PCG32).
     Returns (ray, unit directions)."""
     import drjit as dr
     import mitsuba as mi
@@ -79,72 +98,131 @@ def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None):
     if seed is None:
         ox = oy = mi.Float(0.5)
     else:
-        side = math.ceil(math.sqrt(per_pixel))
+        rows, cols = strata(per_pixel)
         rng = mi.PCG32(size=H * W * per_pixel, initstate=mi.UInt64(idx), initseq=mi.UInt64(seed))
-        ox = (mi.Float(k % side) + rng.next_float32()) / side
-        oy = (mi.Float(k // side) + rng.next_float32()) / side
-    M = mi.Matrix3f((camera.R.T @ np.linalg.inv(camera.K)).tolist())
+        ox = (mi.Float(k % cols) + rng.next_float32()) / cols
+        oy = (mi.Float(k // cols) + rng.next_float32()) / rows
+    M = mi.Matrix3f(camera.ray_matrix.tolist())
     d = dr.normalize(M @ mi.Vector3f(x + ox, y + oy, 1.0))
     o = mi.Point3f(*[float(c) for c in camera.center])
     return mi.Ray3f(o, d), d
 
 
-def exact_passes(built, camera: Camera) -> dict:
-    """Depth, mask, normal, position, uv, instance and layer from pixel-centre rays."""
+@dataclass
+class Hit:
+    """What the pixel-centre rays found: the surface interaction, the hit flag, the unit ray
+    directions and each hit's shape registry id; the inputs of every exact pass."""
+
+    si: object
+    hit: object
+    d: object
+    reg: object
+    camera: Camera
+    built: object
+
+
+# pass name -> function(Hit) -> drjit array (one value or vector per pixel)
+EXACT_PASSES: dict[str, Callable] = {}
+
+
+def exact_pass(name: str):
+    """Register the computation of an exact pass (declared in ``synmitsuba.sample.PASSES``)."""
+    def deco(fn):
+        if name not in PASSES:
+            raise ValueError(f"declare pass {name!r} with synmitsuba.sample.register_pass first")
+        EXACT_PASSES[name] = fn
+        return fn
+    return deco
+
+
+@exact_pass("depth")
+def _depth(h: Hit):
     import drjit as dr
     import mitsuba as mi
-    H, W = camera.height, camera.width
+    return dr.select(h.hit, h.si.t * dr.dot(h.d, mi.Vector3f(*h.camera.R[2].tolist())), 0.0)
+
+
+@exact_pass("mask")
+def _mask(h: Hit):
+    return h.hit
+
+
+@exact_pass("normal")
+def _normal(h: Hit):
+    import drjit as dr
+    import mitsuba as mi
+    n = dr.select(dr.dot(h.si.sh_frame.n, h.d) > 0, -h.si.sh_frame.n, h.si.sh_frame.n)  # face the camera
+    return dr.select(h.hit, dr.normalize(mi.Matrix3f(h.camera.R.tolist()) @ n), 0.0)
+
+
+@exact_pass("position")
+def _position(h: Hit):
+    import drjit as dr
+    return dr.select(h.hit, h.si.p, 0.0)
+
+
+@exact_pass("uv_valid")
+def _uv_valid(h: Hit):
+    return h.built.lookup("has_uv", h.reg, h.hit) > 0
+
+
+@exact_pass("uv")
+def _uv(h: Hit):
+    import drjit as dr
+    import mitsuba as mi
+    # Mitsuba reports barycentric-like coordinates on shapes without uv: those become 0
+    return dr.select(_uv_valid(h), mi.Point2f(h.si.uv.x, 1.0 - h.si.uv.y), 0.0)  # back to v up
+
+
+@exact_pass("instance")
+def _instance(h: Hit):
+    return h.built.lookup("instance", h.reg, h.hit)
+
+
+@exact_pass("layer")
+def _layer(h: Hit):
+    return h.built.lookup("layer", h.reg, h.hit)
+
+
+def _to_numpy(value, spec, H: int, W: int) -> np.ndarray:
+    arr = np.array(value)
+    arr = arr.T if spec.components > 1 else arr
+    return arr.reshape((H, W, spec.components) if spec.components > 1 else (H, W)).astype(spec.dtype)
+
+
+def exact_passes(built, camera: Camera) -> dict:
+    """Every registered exact pass from one ray through each pixel centre."""
+    import drjit as dr
+    import mitsuba as mi
     ray, d = _camera_rays(camera)
     si = built.mi_scene.ray_intersect(ray)
     hit = si.is_valid()
-    axis = mi.Vector3f(*camera.R[2].tolist())
-    depth = dr.select(hit, si.t * dr.dot(d, axis), 0.0)
-    n = dr.select(dr.dot(si.sh_frame.n, d) > 0, -si.sh_frame.n, si.sh_frame.n)  # face the camera
-    Rm = mi.Matrix3f(camera.R.tolist())
-    n_cam = dr.select(hit, dr.normalize(Rm @ n), 0.0)
-    p = dr.select(hit, si.p, 0.0)
-    uv = dr.select(hit, mi.Point2f(si.uv.x, 1.0 - si.uv.y), 0.0)  # back to v up
-    reg = dr.reinterpret_array(mi.UInt32, si.shape)
-    dr.eval(hit, depth, n_cam, p, uv, reg)
-    hit_np = np.array(hit, dtype=bool)
-    instance, layer = _lookup_ids(built, np.array(reg, dtype=np.uint32), hit_np)
-    return {"depth": np.array(depth, dtype=np.float32).reshape(H, W),
-            "mask": hit_np.reshape(H, W),
-            "normal": np.array(n_cam, dtype=np.float32).T.reshape(H, W, 3),
-            "position": np.array(p, dtype=np.float32).T.reshape(H, W, 3),
-            "uv": np.array(uv, dtype=np.float32).T.reshape(H, W, 2),
-            "instance": instance.reshape(H, W), "layer": layer.reshape(H, W)}
-
-
-def _lookup_ids(built, reg: np.ndarray, hit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    instance = np.zeros(len(reg), np.int32)
-    layer = np.zeros(len(reg), np.uint8)
-    if len(built.registry_ids) and hit.any():
-        k = np.clip(np.searchsorted(built.registry_ids, reg[hit]), 0, len(built.registry_ids) - 1)
-        known = built.registry_ids[k] == reg[hit]
-        instance[hit] = np.where(known, built.instance_of[k], 0)
-        layer[hit] = np.where(known, built.layer_of[k], 0)
-    return instance, layer
+    h = Hit(si, hit, d, dr.select(hit, dr.reinterpret_array(mi.UInt32, si.shape), 0), camera, built)
+    values = {name: fn(h) for name, fn in EXACT_PASSES.items()}
+    dr.eval(*values.values())
+    return {name: _to_numpy(v, PASSES[name], camera.height, camera.width) for name, v in values.items()}
 
 
 def coverage(built, camera: Camera, samples: int, seed: int) -> tuple[np.ndarray, dict]:
     """Soft coverage from stratified jittered sub-pixel rays: the fraction of each pixel covered
-    by any geometry (alpha), and per instance id > 0 ({id: (H, W) fraction})."""
+    by any geometry (alpha), and per instance id > 0 ({id: (H, W) fraction}); reduced in drjit."""
     import drjit as dr
     import mitsuba as mi
     H, W = camera.height, camera.width
     ray, _ = _camera_rays(camera, samples, seed=seed)
     pi = built.mi_scene.ray_intersect_preliminary(ray)
     valid = pi.is_valid()
-    count = dr.block_sum(dr.select(valid, mi.Float(1.0), 0.0), samples)  # exact integers
-    alpha = (np.array(count, dtype=np.float32) / samples).reshape(H, W)
+    one = mi.Float(1.0)
+    count = dr.block_sum(dr.select(valid, one, 0.0), samples)  # exact integers
+    ids = built.instance_ids
     per_instance: dict[int, np.ndarray] = {}
-    if (built.instance_of > 0).any():
-        reg = np.array(dr.select(valid, dr.reinterpret_array(mi.UInt32, pi.shape), 0), dtype=np.uint32)
-        inst, _ = _lookup_ids(built, reg, reg != 0)
-        pixel = np.arange(H * W * samples, dtype=np.int64) // samples
-        for i in np.unique(inst):
-            if i > 0:
-                hits = np.bincount(pixel[inst == i], minlength=H * W)
-                per_instance[int(i)] = (hits.astype(np.float32) / samples).reshape(H, W)
+    if ids:
+        inst = built.lookup("instance", dr.select(valid, dr.reinterpret_array(mi.UInt32, pi.shape), 0), valid)
+        sums = [dr.block_sum(dr.select(inst == i, one, 0.0), samples) for i in ids]
+        dr.eval(count, *sums)
+        for i, s in zip(ids, sums):
+            frac = (np.array(s, dtype=np.float32) / samples).reshape(H, W)
+            if frac.any():
+                per_instance[i] = frac
+    alpha = (np.array(count, dtype=np.float32) / samples).reshape(H, W)
     return alpha, per_instance

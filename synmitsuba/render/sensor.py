@@ -52,7 +52,7 @@ def sensor_dict(camera: Camera, spp: int, rfilter: str = "box", sampler: str = "
     """A Mitsuba dict for the camera with a float32 RGB film of the camera's size."""
     import mitsuba as mi
     m = np.eye(4)
-    m[:3, :3] = camera.R.T @ np.linalg.inv(camera.K)
+    m[:3, :3] = camera.ray_matrix
     m[:3, 3] = camera.center
     return {"type": PLUGIN, "ray_matrix": mi.ScalarTransform4f(m.tolist()),
             "film": {"type": "hdrfilm", "width": camera.width, "height": camera.height,

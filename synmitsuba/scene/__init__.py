@@ -1,9 +1,9 @@
 """Scene description: cameras, materials, lights, shapes (plain data, no renderer state)."""
-from synmitsuba.scene.camera import Camera
-from synmitsuba.scene.layers import Layer
-from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
-                                        PointLight, SunSky)
-from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
+from synmitsuba._lazy import lazy_exports
 
-__all__ = ["Camera", "Layer", "Material", "Constant", "SunSky", "EnvMap", "PointLight",
-           "DirectionalLight", "AreaLight", "Scene", "MeshShape", "CurveShape"]
+_EXPORTS = {"Camera": "synmitsuba.scene.camera", "Layer": "synmitsuba.scene.layers",
+            **{n: "synmitsuba.scene.materials" for n in ("Material", "Constant", "SunSky", "EnvMap", "PointLight",
+                                                         "DirectionalLight", "AreaLight")},
+            **{n: "synmitsuba.scene.scene" for n in ("Scene", "MeshShape", "CurveShape")}}
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import camera_ray_matrix, frame
 
 
 def _matrix(name: str, value, shape) -> np.ndarray:
@@ -44,9 +45,11 @@ class Camera:
             setattr(self, name, int(v))
         if not np.allclose(self.K[2], [0, 0, 1]):
             raise ConfigError("camera.K", self.K.tolist(), "the last row of K must be [0, 0, 1]")
-        if self.K[0, 0] <= 0 or self.K[1, 1] <= 0 or abs(np.linalg.det(self.K)) < 1e-12:
-            raise ConfigError("camera.K", self.K.tolist(),
-                              "K is singular: fx = K[0][0] and fy = K[1][1] must be > 0 (pixels)")
+        if self.K[0, 0] <= 0 or self.K[1, 1] <= 0:
+            raise ConfigError("camera.K", self.K.tolist(), "fx = K[0][0] and fy = K[1][1] must be > 0 (pixels)")
+        if self.K[1, 0] != 0:
+            raise ConfigError("camera.K", self.K.tolist(), "K[1][0] must be 0: an OpenCV K is upper triangular "
+                              "[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]")
         if not np.allclose(self.R @ self.R.T, np.eye(3), atol=1e-6) or np.linalg.det(self.R) < 0:
             raise ConfigError("camera.R", self.R.tolist(), "R must be a rotation (orthonormal, det +1)")
 
@@ -66,16 +69,13 @@ class Camera:
         eye = _matrix("camera.eye", eye, (3,))
         target = _matrix("camera.target", target, (3,))
         up = _matrix("camera.up", up, (3,))
-        z = target - eye
-        if np.linalg.norm(z) < 1e-9:
+        if np.linalg.norm(target - eye) < 1e-9:
             raise ConfigError("camera.target", target.tolist(), "target must differ from eye")
-        z /= np.linalg.norm(z)
-        x = np.cross(-up, z)  # image x (right) = down x forward
-        if np.linalg.norm(x) < 1e-9:
-            raise ConfigError("camera.up", up.tolist(), "up must not be parallel to the viewing direction")
-        x /= np.linalg.norm(x)
-        y = np.cross(z, x)
-        R = np.stack([x, y, z])
+        try:
+            F = frame(target - eye, up, keep="forward")
+        except ValueError:
+            raise ConfigError("camera.up", up.tolist(), "up must not be parallel to the viewing direction") from None
+        R = np.stack([-F[:, 0], -F[:, 1], F[:, 2]])  # OpenCV: x right (= -side), y down, z forward
         K = cls.intrinsics(fov_y_deg, width, height) if K is None else K
         return cls(K=K, R=R, t=-R @ eye, width=width, height=height)
 
@@ -86,10 +86,9 @@ class Camera:
         return -self.R.T @ self.t
 
     @property
-    def world_to_camera(self) -> np.ndarray:
-        M = np.eye(4)
-        M[:3, :3], M[:3, 3] = self.R, self.t
-        return M
+    def ray_matrix(self) -> np.ndarray:
+        """``R^T K^-1``: pixel [u, v, 1] -> world ray direction (not normalised)."""
+        return camera_ray_matrix(self.K, self.R)
 
     def project(self, points) -> tuple[np.ndarray, np.ndarray]:
         """World points (N, 3) -> pixel coordinates (N, 2) and z-depth (N,)."""
@@ -104,8 +103,7 @@ class Camera:
         pix = np.stack([u, v], -1)
         pix = pix + (0.5 if offsets is None else np.asarray(offsets))
         ones = np.ones(pix.shape[:-1] + (1,))
-        d_cam = np.concatenate([pix, ones], -1) @ np.linalg.inv(self.K).T
-        d = d_cam @ self.R  # R^T applied to row vectors
+        d = np.concatenate([pix, ones], -1) @ self.ray_matrix.T
         return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
     def resized(self, width: int, height: int) -> "Camera":

@@ -5,7 +5,8 @@ uint8 array is taken as sRGB-encoded and decoded once, so it stays differentiabl
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -43,7 +44,8 @@ class Material:
     """A surface material.
 
     kind: ``diffuse`` (Lambertian), ``principled`` (Disney-style; roughness, metallic,
-    specular) or ``hair`` (Mitsuba's hair BSDF for curves, coloured by ``melanin``).
+    specular) or ``hair`` (Mitsuba's hair BSDF for curves, coloured by ``melanin``, 0 blond .. 1
+    black, and ``redness``, the pheomelanin share, 0 .. 1 red).
     ``texture`` replaces ``base_color``; ``bump`` (H, W height map, scaled by ``bump_scale``)
     or ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded) perturb shading normals.
     """
@@ -59,13 +61,14 @@ class Material:
     normal_map: np.ndarray | None = None
     two_sided: bool = True
     melanin: float = 0.3
+    redness: float = 0.0
     name: str = ""
 
     def __post_init__(self):
         self.base_color = _rgb("material.base_color", self.base_color)
         if self.kind not in MATERIAL_KINDS:
             raise ConfigError("material.kind", self.kind, f"use one of {', '.join(MATERIAL_KINDS)}")
-        for f in ("roughness", "metallic", "specular", "melanin"):
+        for f in ("roughness", "metallic", "specular", "melanin", "redness"):
             v = getattr(self, f)
             if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0):
                 raise ConfigError(f"material.{f}", v, "give a number in [0, 1]")
@@ -120,13 +123,19 @@ class EnvMap:
     scale: float = 1.0
     rotation_deg: float = 0.0
 
+    def __post_init__(self):
+        if isinstance(self.source, np.ndarray):
+            self.source = _image("environment.source", self.source, 3)
+        elif not isinstance(self.source, (str, os.PathLike)) or not os.path.isfile(self.source):
+            raise ConfigError("environment.file", self.source, "give the path of an existing .exr or .hdr file "
+                              "(or an H x W x 3 array)")
+        if not (isinstance(self.scale, (int, float)) and self.scale >= 0):
+            raise ConfigError("environment.scale", self.scale, "give a number >= 0")
+
     def pixels(self) -> np.ndarray:
         if isinstance(self.source, np.ndarray):
-            arr = _image("environment.source", self.source, 3)
+            arr = self.source
         else:
-            import os
-            if not isinstance(self.source, (str, os.PathLike)) or not os.path.isfile(self.source):
-                raise ConfigError("environment.file", self.source, "give the path of an existing .exr or .hdr file")
             import mitsuba as mi
             bmp = mi.Bitmap(str(self.source)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False)
             arr = np.array(bmp, dtype=np.float32)
@@ -160,7 +169,6 @@ class AreaLight:
     target: tuple = (0.0, 0.0, 0.0)
     size: tuple = (1.0, 1.0)
     radiance: float | tuple = 5.0
-    extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.radiance = _rgb("light.radiance", self.radiance)

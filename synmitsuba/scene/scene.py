@@ -28,6 +28,7 @@ class MeshShape:
     material: Material
     instance: int
     layer: int
+    previous_vertices: np.ndarray | None = None  # before the last update_mesh (for flow)
 
 
 @dataclass
@@ -38,7 +39,7 @@ class CurveShape:
     material: Material
     instance: int
     layer: int
-    kind: str = "bspline"
+    previous_points: np.ndarray | None = None  # before the last update_curves (for flow)
 
 
 def _ids(name: str, instance, layer) -> tuple[int, int]:
@@ -126,7 +127,23 @@ class Scene:
         mesh = self.meshes[name]
         v = np.asarray(vertices, dtype=np.float64)
         _finite(f"{name}.vertices", v, f"{len(mesh.vertices)} x 3", v.shape == mesh.vertices.shape)
-        mesh.vertices = v
+        mesh.previous_vertices, mesh.vertices = mesh.vertices, v
+        self.geometry_version += 1
+
+    def update_curves(self, name: str, points, radius=None) -> None:
+        """Move curves' control points (same strand and point count), optionally with new radii;
+        the next render updates Mitsuba in place (no reload)."""
+        if name not in self.curves:
+            raise ConfigError("shape name", name, f"no curves of that name; curves: {', '.join(self.curves)}")
+        c = self.curves[name]
+        p = np.asarray(points, dtype=np.float64)
+        _finite(f"{name}.points", p, "x".join(map(str, c.points.shape)), p.shape == c.points.shape)
+        if radius is not None:
+            r = np.broadcast_to(np.asarray(radius, dtype=np.float64), c.radius.shape)
+            if not (np.isfinite(r).all() and (r > 0).all()):
+                raise ConfigError(f"{name}.radius", float(np.min(r)), "radii must be finite and > 0 metres")
+            c.radius = r.copy()
+        c.previous_points, c.points = c.points, p
         self.geometry_version += 1
 
     def remove(self, name: str) -> None:
@@ -146,11 +163,3 @@ class Scene:
             raise ConfigError("light", type(light).__name__, "use sm.PointLight, sm.DirectionalLight or sm.AreaLight")
         self.lights.append(light)
         self.structure_version += 1
-
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Axis-aligned bounding box of all shapes (min, max)."""
-        pts = [m.vertices for m in self.meshes.values()] + [c.points.reshape(-1, 3) for c in self.curves.values()]
-        if not pts:
-            return np.zeros(3), np.zeros(3)
-        allp = np.concatenate(pts)
-        return allp.min(0), allp.max(0)

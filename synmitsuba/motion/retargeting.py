@@ -18,22 +18,10 @@ import numpy as np
 
 from synmitsuba.body.skeleton import Skeleton
 from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import align_vectors
 from synmitsuba.motion.humanoid import humanoid_skeleton
 from synmitsuba.motion.motion import Motion
 from synmitsuba.motion.names import BONE_CHILD, canonical_map
-
-
-def _min_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Smallest rotation taking direction a to direction b."""
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
-    v, c = np.cross(a, b), float(a @ b)
-    if c < -1 + 1e-9:  # opposite: turn by pi about any perpendicular axis
-        axis = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
-        axis /= np.linalg.norm(axis)
-        return 2 * np.outer(axis, axis) - np.eye(3)
-    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return np.eye(3) + K + K @ K / (1 + c)
 
 
 def _descendant(sk: Skeleton, i: int, j: int) -> bool:
@@ -62,7 +50,7 @@ def tpose_globals(sk: Skeleton, canon: dict[str, str]) -> np.ndarray:
         d_rest = parent @ (sk.rest_positions[j] - sk.rest_positions[i])
         d_ref = ref.rest_positions[ref.index(child)] - ref.rest_positions[ref.index(c)]
         if np.linalg.norm(d_rest) > 1e-9:
-            G[i] = _min_rotation(d_rest, d_ref) @ parent
+            G[i] = align_vectors(d_rest, d_ref) @ parent
     return G
 
 

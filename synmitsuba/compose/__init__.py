@@ -1,0 +1,9 @@
+"""Scene composition: scene files (environment, objects, lights, cameras) and the subjects
+placed in them, as a ``Scene`` ready to render."""
+from synmitsuba._lazy import lazy_exports
+
+_EXPORTS = {"load_scene_file": "synmitsuba.compose.scenefile", "SceneFile": "synmitsuba.compose.scenefile",
+            "add_subjects": "synmitsuba.compose.subjects", "SubjectEntry": "synmitsuba.compose.subjects",
+            "PlacedSubject": "synmitsuba.compose.subjects"}
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

@@ -1,0 +1,115 @@
+"""Geometry shared by every stage, from scipy and trimesh where they already do it.
+
+Rotations are scipy's ``Rotation``/``Slerp`` behind names that state our conventions (BVH's
+intrinsic Euler order); normals, areas and vector alignment are
+trimesh's. The two things written here are ours alone: the orthonormal frame from an up and a
+forward direction, and the camera-ray matrix ``R^T K^-1`` every camera consumer uses.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+# -- rotations ---------------------------------------------------------------------------
+def _Rotation():
+    from scipy.spatial.transform import Rotation
+    return Rotation
+
+
+def _batched(fn, arr: np.ndarray, tail: int, out_tail: tuple) -> np.ndarray:
+    """Apply a scipy constructor over leading axes: (..., tail) -> (..., *out_tail)."""
+    arr = np.asarray(arr, dtype=np.float64)
+    lead = arr.shape[:arr.ndim - tail] if tail else arr.shape
+    flat = arr.reshape((-1,) + arr.shape[len(lead):])
+    out = fn(flat) if len(flat) else np.zeros((0,) + out_tail)
+    return np.asarray(out).reshape(lead + out_tail)
+
+
+def axis_rotation(axis: str, angle) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) about 'x', 'y' or 'z' by ``angle`` radians."""
+    a = np.asarray(angle, dtype=np.float64)
+    return _batched(lambda x: _Rotation().from_euler(axis.lower(), x[:, None]).as_matrix(), a, 0, (3, 3))
+
+
+def euler_to_matrix(angles, order: str) -> np.ndarray:
+    """Intrinsic rotations applied in ``order`` (BVH convention): for order 'ZXY',
+    R = Rz(a0) @ Rx(a1) @ Ry(a2). ``angles`` (..., len(order)) in radians."""
+    # scipy: upper-case axes are intrinsic, which is exactly BVH's channel order
+    return _batched(lambda x: _Rotation().from_euler(order.upper(), x).as_matrix(), angles, 1, (3, 3))
+
+
+def axis_angle_to_matrix(v) -> np.ndarray:
+    """Rotation vectors (..., 3) -> matrices (..., 3, 3)."""
+    return _batched(lambda x: _Rotation().from_rotvec(x).as_matrix(), v, 1, (3, 3))
+
+
+def slerp_matrices(rotations: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Rotations (F, ..., 3, 3) keyed at frames 0..F-1, sampled at fractional frame ``times``
+    (T,) by spherical interpolation per element (scipy's ``Slerp``) -> (T, ..., 3, 3)."""
+    from scipy.spatial.transform import Slerp
+    R = np.asarray(rotations, dtype=np.float64)
+    F, inner = R.shape[0], R.shape[1:-2]
+    flat = R.reshape(F, -1, 3, 3)
+    times = np.clip(np.asarray(times, dtype=np.float64), 0, F - 1)
+    if F == 1:
+        return np.broadcast_to(R[0], (len(times),) + R.shape[1:]).copy()
+    out = np.empty((len(times), flat.shape[1], 3, 3))
+    for j in range(flat.shape[1]):
+        out[:, j] = Slerp(np.arange(F), _Rotation().from_matrix(flat[:, j]))(times).as_matrix()
+    return out.reshape((len(times),) + inner + (3, 3))
+
+
+def align_vectors(a, b) -> np.ndarray:
+    """The smallest rotation (3, 3) taking direction ``a`` to direction ``b`` (trimesh)."""
+    import trimesh
+    return trimesh.geometry.align_vectors(np.asarray(a, float), np.asarray(b, float))[:3, :3]
+
+
+# -- frames ------------------------------------------------------------------------------
+def frame(forward, up, keep: str = "up") -> np.ndarray:
+    """Right-handed orthonormal frame (3, 3) whose columns are (side, up, forward) with
+    side = up x forward. ``keep`` names the direction kept exactly ("up" for a head or body
+    frame, "forward" for a camera or a light); the other is made perpendicular to it.
+    Raises ValueError when the two are parallel."""
+    u = np.asarray(up, dtype=np.float64)
+    f = np.asarray(forward, dtype=np.float64)
+    u, f = u / np.linalg.norm(u), f / np.linalg.norm(f)
+    side = np.cross(u, f)
+    if np.linalg.norm(side) < 1e-9:
+        raise ValueError("forward is parallel to up")
+    side /= np.linalg.norm(side)
+    if keep == "up":
+        f = np.cross(side, u)
+    else:
+        u = np.cross(f, side)
+    return np.stack([side, u, f], 1)
+
+
+# -- meshes ------------------------------------------------------------------------------
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals (trimesh's mean of the unnormalised face normals)."""
+    import trimesh
+    v = np.asarray(vertices, dtype=np.float64)
+    cross = trimesh.triangles.cross(v[faces])
+    return trimesh.geometry.mean_vertex_normals(len(v), faces, cross)
+
+
+def face_normals(triangles: np.ndarray) -> np.ndarray:
+    """Unit normals (N, 3) of triangles (N, 3, 3); zero for degenerate ones."""
+    import trimesh
+    cross = trimesh.triangles.cross(np.asarray(triangles, dtype=np.float64))
+    return cross / np.maximum(np.linalg.norm(cross, axis=1, keepdims=True), 1e-12)
+
+
+def triangle_areas(triangles: np.ndarray) -> np.ndarray:
+    """Areas (N,) of triangles (N, 3, 3)."""
+    import trimesh
+    return trimesh.triangles.area(np.asarray(triangles, dtype=np.float64))
+
+
+# -- cameras -----------------------------------------------------------------------------
+def camera_ray_matrix(K: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """``R^T K^-1``: maps homogeneous pixel coordinates [u, v, 1] (pixel centres at integer +
+    0.5) to the world direction of the ray through them. Used by the sensor, the exact passes
+    and ``Camera.pixel_rays`` alike."""
+    return np.asarray(R, dtype=np.float64).T @ np.linalg.inv(np.asarray(K, dtype=np.float64))

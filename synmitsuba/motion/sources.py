@@ -1,0 +1,45 @@
+"""Where a motion comes from, resolved in one place: a procedural kind, a BVH file or an
+AMASS npz. Scene files, the CLI and the motion library all call ``load_motion``."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError
+from synmitsuba.motion.motion import Motion
+
+
+def motion_source_kind(source: str) -> str:
+    """'procedural', 'bvh' or 'amass' for a motion source string; ConfigError otherwise."""
+    from synmitsuba.motion.procedural import KINDS
+    text = str(source)
+    if text in KINDS:
+        return "procedural"
+    if text.lower().endswith(".bvh"):
+        return "bvh"
+    if text.lower().endswith(".npz"):
+        return "amass"
+    raise ConfigError("motion", source, f"give a .bvh or AMASS .npz file or one of {', '.join(KINDS)}")
+
+
+def load_motion(source: str, rng: np.random.Generator, seconds: float = 2.0, base: str = "",
+                labels=(), field: str = "motion") -> Motion:
+    """The motion ``source`` names: a procedural kind (``seconds`` long, parameters from
+    ``rng``), or a .bvh / AMASS .npz file (relative paths are taken from ``base``). ``field``
+    names the setting in errors (e.g. ``subjects[2].motion``)."""
+    try:
+        kind = motion_source_kind(source)
+    except ConfigError as exc:
+        raise ConfigError(field, exc.value, exc.fix) from None
+    if kind == "procedural":
+        from synmitsuba.motion.procedural import procedural_motion
+        return procedural_motion(str(source), rng, seconds=seconds)
+    path = os.path.join(base, os.fspath(source))
+    if not os.path.isfile(path):
+        raise ConfigError(field, source, f"no such file ({path})" + ("; paths are relative to the scene file" if base else ""))
+    if kind == "bvh":
+        from synmitsuba.motion.bvh import load_bvh
+        return load_bvh(path, labels=labels)
+    from synmitsuba.motion.amass import load_amass
+    return load_amass(path, labels=labels)
