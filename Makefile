@@ -47,6 +47,8 @@ test-all: setup
 	$(PY) -m pytest -q -m ''
 
 bench: setup
+	$(PY) -m pytest -q -m slow
+	$(PY) bench/import_time.py
 	$(PY) bench/render_passes.py
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py

@@ -1,5 +1,6 @@
 """The command line and scene files, end to end."""
 import json
+import pathlib
 import textwrap
 
 import numpy as np
@@ -9,6 +10,7 @@ from synmitsuba.cli import main
 from synmitsuba.errors import ConfigError
 from synmitsuba.compose.scenefile import load_scene_file
 
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCENE = textwrap.dedent("""
     render: {spp: 4, width: 40, height: 30}
     environment: {type: constant, radiance: 0.8}
@@ -107,3 +109,101 @@ def test_scene_file_with_a_posed_subject(sm, tmp_path):
     assert int(sm.Layer.BODY) in set(np.unique(s.layer))
     (tmp_path / "bad.yaml").write_text((tmp_path / "people.yaml").read_text().replace("motion: walk", "motion: moonwalk"))
     assert main(["render", str(tmp_path / "bad.yaml"), "--out", str(tmp_path / "o")]) == 2
+
+
+def _run(*args, **kw):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "synmitsuba", *args], capture_output=True, text=True,
+                          timeout=300, **kw)
+
+
+def test_version_and_help_with_defaults(capsys):
+    from synmitsuba import __version__
+    from synmitsuba.cli import build_parser
+    assert main(["--version"]) == 0 and capsys.readouterr().out.strip() == f"synmitsuba {__version__}"
+    parser = build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    assert {"render", "info", "subject", "motion"} <= set(commands)
+    subs = dict(commands)
+    subs["motion preview"] = commands["motion"]._subparsers._group_actions[0].choices["preview"]
+    for name, sub in subs.items():
+        assert sub.description, name
+        for action in sub._actions:
+            if action.dest not in ("help", "motion_command"):
+                assert action.help, (name, action.dest)
+        text = sub.format_help()
+        assert "(default: None)" not in text
+        for action in sub._actions:
+            hidden = action.default is None or action.default is False or action.default == "==SUPPRESS=="
+            if not hidden and action.option_strings:
+                assert f"(default: {action.default})" in " ".join(text.split()), (name, action.dest)
+            elif action.option_strings and not action.required and action.dest not in ("help", "quiet", "stick"):
+                assert "default" in action.help, (name, action.dest)  # says what applies
+    assert "Run 'synmitsuba COMMAND --help'" in parser.format_help()
+
+
+@pytest.mark.parametrize("argv,names", [
+    (["subject", "--res", "big", "--out", "o"], ["--res", "'big'", "WIDTHxHEIGHT"]),
+    (["subject", "--views", "0", "--out", "o"], ["--views", "'0'"]),
+    (["subject", "--seed", "-1", "--out", "o"], ["--seed", "'-1'"]),
+    (["motion", "preview", "walk", "--frames", "0", "--out", "o"], ["--frames", "'0'"]),
+    (["motion", "preview", "walk", "--seconds", "-2", "--out", "o"], ["--seconds"]),
+    (["motion", "preview", "moonwalk", "--out", "o"], ["CLIP = 'moonwalk'", "walk"]),
+    (["render", "nope.yaml", "--out", "o"], ["scene file", "nope.yaml", "no such file"]),
+])
+def test_bad_arguments_get_one_line_and_exit_2(argv, names, tmp_path, capsys):
+    assert main(argv[:-1] + [str(tmp_path / argv[-1])]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    for n in names:
+        assert n in err, (n, err)
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_unwritable_out_is_refused_before_any_work(scene_dir, capsys):
+    (scene_dir / "file").write_text("not a folder")
+    for argv in (["render", str(scene_dir / "s.yaml")], ["subject"], ["motion", "preview", "walk"]):
+        assert main(argv + ["--out", str(scene_dir / "file" / "sub")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and err.split(": error: ")[1].startswith("--out = "), err
+
+
+def test_a_view_that_sees_nothing_warns_on_one_line(sm, scene_dir, capsys):
+    text = SCENE.replace("{eye: [0, 1, 3], target: [0, 0.3, 0], fov_y_deg: 40}", "{eye: [0, 1, 3], target: [0, 5, 9]}")
+    (scene_dir / "away.yaml").write_text(text.replace("      - {name: offaxis", "#"))
+    assert main(["render", str(scene_dir / "away.yaml"), "--out", str(scene_dir / "o"), "--quiet"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["synmitsuba render: warning: the camera sees no geometry: every pixel is background; check the "
+                   "camera's position, target and field of view"]
+
+
+def test_no_third_party_banner_and_clean_stdout(tmp_path):
+    r = _run("subject", "--sheet", "1", "--res", "24x32", "--spp", "1", "--out", str(tmp_path / "s.png"))
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == str(tmp_path / "s.png")
+    assert "Warp" not in r.stderr and "CUDA" not in r.stderr, r.stderr
+
+
+def test_ctrl_c_is_one_line_and_leaves_nothing_half_written(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "o"
+    p = subprocess.Popen([sys.executable, "-m", "synmitsuba", "render", "scenes/demo.yaml", "--out", str(out),
+                          "--res", "200x160", "--spp", "2048", "--quiet"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, cwd=str(ROOT))
+    t0 = time.time()
+    while not out.exists() and p.poll() is None and time.time() - t0 < 120:  # the command has started its work
+        time.sleep(0.1)
+    time.sleep(2.0)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert err.strip().splitlines() == ["synmitsuba render: interrupted; files already written are complete, "
+                                        "nothing half-written was kept"]
+    names = sorted(f.name for f in out.iterdir())
+    assert not any(".tmp-" in n for n in names)
+    stems = {n.rsplit(".", 1)[0] for n in names}
+    assert all((out / f"{s}.exr").exists() for s in stems if (out / f"{s}.json").exists())

@@ -256,6 +256,7 @@ def test_smplx_backend_with_a_synthetic_model(tmp_path, monkeypatch):
         sm.build_subject(sm.SubjectRecipe(model="smplx"))
 
 
+@pytest.mark.slow
 def test_a_few_dozen_random_subjects_build_without_degenerate_meshes():
     for seed in range(24):
         h = sm.build_subject(sm.sample_subject(np.random.default_rng(1000 + seed), {"texture_size": 64}))

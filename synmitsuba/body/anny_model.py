@@ -32,18 +32,53 @@ def anny_root() -> str:
     return os.path.dirname(anny.__file__)
 
 
+@contextlib.contextmanager
+def _without_warp_banner():
+    """Drop what warp-lang (anny's skinning) prints when it starts, its native CUDA-driver
+    warning included (written by C code straight to file descriptor 2); anything else printed
+    meanwhile is passed on to stderr. Our commands print no third-party banners."""
+    import tempfile
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            with contextlib.redirect_stdout(sys.stderr):
+                yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            text = tmp.read().decode(errors="replace")
+    keep = [line for line in text.splitlines() if line.strip() and not _is_warp_noise(line)]
+    if keep:
+        print("\n".join(keep), file=sys.stderr)
+
+
+def _quiet_warp() -> None:
+    """warp-lang logs every kernel module load; keep its errors only (set after ``wp.init()``,
+    which resets the level)."""
+    try:
+        import warp
+        warp.config.log_level = getattr(warp, "LOG_ERROR", 40)
+    except ImportError:
+        pass
+
+
+def _is_warp_noise(line: str) -> bool:
+    starts = ("Warp ", "   CUDA Toolkit", "   Devices:", '     "cpu"', "   Kernel cache:", "     /", "Module ")
+    return line.startswith(starts)
+
+
 @functools.lru_cache(maxsize=1)
 def load_anny():
     """The anny model (float32, CPU), built once per process; anny caches it on disk too."""
     os.environ.setdefault("ANNY_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "anny"))
     import torch
-    try:  # warp-lang (anny's skinning) prints a banner on start; our commands print none
-        import warp
-        warp.config.quiet = True
-    except ImportError:
-        pass
-    with contextlib.redirect_stdout(sys.stderr):
+    with _without_warp_banner():
         import anny
+        _quiet_warp()
         torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
         return anny.Anny().to(dtype=torch.float32)
 

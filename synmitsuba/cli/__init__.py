@@ -19,8 +19,16 @@ DESCRIPTION = ("synthetic, exactly annotated images of clothed, animated people,
                "Run 'synmitsuba COMMAND --help' for a command's options.")
 
 
-class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Shows every option's default; keeps descriptions as written."""
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Shows every option's default (options without one say what applies in their help);
+    keeps descriptions as written."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        shown = not any(action.default is x for x in (None, False, argparse.SUPPRESS))
+        if shown and action.option_strings and "%(default)" not in text:
+            text += " (default: %(default)s)"
+        return text
 
 
 class Parser(argparse.ArgumentParser):

@@ -66,7 +66,7 @@ def add_parser(sub) -> None:
     pv.add_argument("--out", required=True, help="output folder (created)")
     pv.add_argument("--frames", type=positive_int, default=6, help="frames in the strip")
     pv.add_argument("--seconds", type=positive_float, default=2.0, help="length of a procedural clip")
-    pv.add_argument("--res", type=resolution, default=(200, 260), help="WIDTHxHEIGHT of each frame")
+    pv.add_argument("--res", type=resolution, default="200x260", help="WIDTHxHEIGHT of each frame")
     pv.add_argument("--spp", type=positive_int, default=16, help="samples per pixel")
     pv.add_argument("--seed", type=natural_int, default=0, help="seed of the subject and of a procedural clip")
     pv.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")

@@ -72,7 +72,7 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=natural_int, default=0, help="subject seed (with --sheet: the first of K seeds)")
     p.add_argument("--out", required=True, help="output folder (with --sheet: a .png path or a folder)")
     p.add_argument("--views", type=positive_int, default=6, help="turntable views")
-    p.add_argument("--res", type=resolution, default=(240, 320), help="WIDTHxHEIGHT of each view")
+    p.add_argument("--res", type=resolution, default="240x320", help="WIDTHxHEIGHT of each view")
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel")
     p.add_argument("--sheet", type=natural_int, default=0, help="render this many subjects into one contact sheet "
                    "instead of a turntable")
