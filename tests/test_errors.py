@@ -106,3 +106,17 @@ def test_probe_catches_an_aborting_llvm(monkeypatch):
     monkeypatch.setenv("DRJIT_LIBLLVM_PATH", old[0])
     ok, msg = llvm.probe()
     assert not ok and "libLLVM >= 16" in msg and old[0] in msg
+
+
+def test_a_scene_without_light_warns_instead_of_a_silent_black_image(sm):
+    scene = sm.Scene()
+    scene.add_mesh("m", V3, TRI, instance=1)
+    cam = sm.Camera.look_at((0, 0, 2), (0, 0, 0), width=8, height=8)
+    with pytest.warns(sm.SynMitsubaWarning, match="no environment and no light"):
+        s = sm.render(scene, cam, spp=1)
+    assert s.mask.any() and (s.rgb == 0).all()
+    scene.set_environment(sm.Constant(1.0))
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sm.render(scene, cam, spp=1)

@@ -12,6 +12,7 @@ from synmitsuba.body.skeleton import forward_kinematics
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.humanoid import FEET, humanoid_skeleton
 from synmitsuba.motion.motion import Motion
+from synmitsuba.schema import Choice, Number, mapping
 from synmitsuba.geometry import axis_rotation
 
 D = np.radians
@@ -33,20 +34,14 @@ KINDS = tuple(PARAMS)
 
 def _params(kind: str, rng: np.random.Generator, given: dict) -> dict:
     spec = PARAMS[kind]
-    unknown = sorted(set(given) - set(spec))
-    if unknown:
-        raise ConfigError(f"{kind}.{unknown[0]}", given[unknown[0]], f"parameters of {kind!r}: {', '.join(spec)}")
+    mapping(kind, given, spec)
     out = {}
     for name, rule in spec.items():  # sample every parameter, so given ones don't shift the stream
         value = rng.choice(rule) if isinstance(rule[0], str) else rng.uniform(*rule)
-        value = given.get(name, value)
-        if isinstance(rule[0], str):
-            if value not in rule:
-                raise ConfigError(f"{kind}.{name}", value, f"use one of {', '.join(rule)}")
-        else:
-            lo, hi = min(rule[0], 0.0) if name in ("speed",) else rule[0], rule[1]
-            if not isinstance(value, (int, float)) or not (lo - 1e-9 <= value <= 2 * hi + 1e-9) and name != "angle_deg":
-                raise ConfigError(f"{kind}.{name}", value, f"give a number around [{rule[0]}, {rule[1]}]")
+        if name in given:  # a given value may lie outside the sampled range, up to twice its top
+            check = Choice(rule) if isinstance(rule[0], str) else Number() if name == "angle_deg" else \
+                Number(min(rule[0], 0.0) if name == "speed" else rule[0], 2 * rule[1])
+            value = check(f"{kind}.{name}", given[name])
         out[name] = value.item() if hasattr(value, "item") else value
     return out
 

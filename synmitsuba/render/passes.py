@@ -22,14 +22,11 @@ from synmitsuba.render.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
+from synmitsuba.schema import Number
+
+POSITIVE = Number(1, integer=True)
 
 _integrators: dict = {}
-
-
-def _check_int(field: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ConfigError(field, value, f"give an integer >= {low}")
-    return int(value)
 
 
 def _integrator(max_depth: int):
@@ -45,10 +42,9 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
     bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``."""
     import mitsuba as mi
-    spp = _check_int("spp", spp, 1)
-    seed = _check_int("seed", seed, 0)
-    max_depth = _check_int("max_depth", max_depth, 1)
-    coverage_samples = _check_int("coverage_samples", coverage_samples, 1)
+    spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
+                                        (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
+    seed = Number(0, 2 ** 32 - 1, integer=True)("seed", seed)
     if not isinstance(camera, Camera):
         raise ConfigError("camera", type(camera).__name__, "give a synmitsuba.Camera")
     if scene.environment is None and not scene.lights:

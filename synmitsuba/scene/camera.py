@@ -12,6 +12,9 @@ import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import camera_ray_matrix, frame
+from synmitsuba.schema import Number
+
+PIXELS = Number(1, integer=True)  # image sizes, in pixels
 
 
 def _matrix(name: str, value, shape) -> np.ndarray:
@@ -38,11 +41,8 @@ class Camera:
         self.K = _matrix("camera.K", self.K, (3, 3))
         self.R = _matrix("camera.R", self.R, (3, 3))
         self.t = _matrix("camera.t", self.t, (3,))
-        for name in ("width", "height"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v <= 0:
-                raise ConfigError(f"camera.{name}", v, "give a positive integer number of pixels")
-            setattr(self, name, int(v))
+        self.width = PIXELS("camera.width", self.width)
+        self.height = PIXELS("camera.height", self.height)
         if not np.allclose(self.K[2], [0, 0, 1]):
             raise ConfigError("camera.K", self.K.tolist(), "the last row of K must be [0, 0, 1]")
         if self.K[0, 0] <= 0 or self.K[1, 1] <= 0:

@@ -11,6 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.schema import Number
+
+UNIT = Number(0.0, 1.0)
 
 MATERIAL_KINDS = ("diffuse", "principled", "hair")
 
@@ -69,9 +72,7 @@ class Material:
         if self.kind not in MATERIAL_KINDS:
             raise ConfigError("material.kind", self.kind, f"use one of {', '.join(MATERIAL_KINDS)}")
         for f in ("roughness", "metallic", "specular", "melanin", "redness"):
-            v = getattr(self, f)
-            if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0):
-                raise ConfigError(f"material.{f}", v, "give a number in [0, 1]")
+            setattr(self, f, UNIT(f"material.{f}", getattr(self, f)))
         if self.texture is not None:
             self.texture = _image("material.texture", self.texture, 3)
         if self.bump is not None:

@@ -11,9 +11,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.schema import Number
 from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
                                         PointLight, SunSky)
 
+INSTANCE = Number(0, 2 ** 31 - 1, integer=True)
+LAYER_ID = Number(0, 255, integer=True)
 ENVIRONMENTS = (Constant, SunSky, EnvMap)
 LIGHTS = (PointLight, DirectionalLight, AreaLight)
 
@@ -43,11 +46,8 @@ class CurveShape:
 
 
 def _ids(name: str, instance, layer) -> tuple[int, int]:
-    if isinstance(instance, bool) or not isinstance(instance, (int, np.integer)) or not 0 <= instance < 2**31:
-        raise ConfigError(f"{name}.instance", instance, "give an integer in [0, 2^31); 0 means background/none")
-    if isinstance(layer, bool) or not isinstance(layer, (int, np.integer)) or not 0 <= int(layer) <= 255:
-        raise ConfigError(f"{name}.layer", layer, "give an integer layer id in [0, 255] (see synmitsuba.Layer)")
-    return int(instance), int(layer)
+    """Instance id in [0, 2^31) (0 = background/none) and layer id in [0, 255] (synmitsuba.Layer)."""
+    return INSTANCE(f"{name}.instance", instance), LAYER_ID(f"{name}.layer", layer)
 
 
 def _finite(field_name: str, arr: np.ndarray, shape_desc: str, ok: bool) -> np.ndarray:
