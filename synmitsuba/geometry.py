@@ -1,9 +1,9 @@
 """Geometry shared by every stage, from scipy and trimesh where they already do it.
 
-Rotations are scipy's ``Rotation``/``Slerp`` behind names that state our conventions (BVH's
-intrinsic Euler order); normals, areas and vector alignment are
-trimesh's. The two things written here are ours alone: the orthonormal frame from an up and a
-forward direction, and the camera-ray matrix ``R^T K^-1`` every camera consumer uses.
+Rotations (vector alignment included) are scipy's ``Rotation``/``Slerp`` behind names that
+state our conventions (BVH's intrinsic Euler order); normals and areas are trimesh's. The
+two things written here are ours alone: the orthonormal frame from an up and a forward
+direction, and the camera-ray matrix ``R^T K^-1`` every camera consumer uses.
 """
 from __future__ import annotations
 
@@ -60,9 +60,11 @@ def slerp_matrices(rotations: np.ndarray, times: np.ndarray) -> np.ndarray:
 
 
 def align_vectors(a, b) -> np.ndarray:
-    """The smallest rotation (3, 3) taking direction ``a`` to direction ``b`` (trimesh)."""
-    import trimesh
-    return trimesh.geometry.align_vectors(np.asarray(a, float), np.asarray(b, float))[:3, :3]
+    """The smallest rotation (3, 3) taking direction ``a`` to direction ``b`` (scipy's
+    ``Rotation.align_vectors`` with one pair; trimesh's ``align_vectors`` is not the smallest:
+    it may add a twist about ``b``, which retargeting must not)."""
+    R, _ = _Rotation().align_vectors([np.asarray(b, float)], [np.asarray(a, float)])
+    return R.as_matrix()
 
 
 # -- frames ------------------------------------------------------------------------------

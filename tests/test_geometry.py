@@ -1,0 +1,65 @@
+"""The shared geometry helpers against formulas written out here."""
+import numpy as np
+import pytest
+
+from synmitsuba.geometry import (align_vectors, axis_rotation, camera_ray_matrix, euler_to_matrix, frame,
+                                 slerp_matrices, triangle_areas, vertex_normals)
+
+
+def _rodrigues_min(a, b):
+    """Smallest rotation taking a to b: about a x b by the angle between them."""
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    v, c = np.cross(a, b), a @ b
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1 + c)
+
+
+def test_align_vectors_is_the_smallest_rotation():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        a, b = rng.normal(size=3), rng.normal(size=3)
+        np.testing.assert_allclose(align_vectors(a, b), _rodrigues_min(a, b), atol=1e-9)
+    R = align_vectors([1.0, 0, 0], [-1.0, 0, 0])  # opposite: a half turn that takes a to b
+    np.testing.assert_allclose(R @ [1, 0, 0], [-1, 0, 0], atol=1e-9)
+    assert np.linalg.det(R) == pytest.approx(1.0)
+
+
+def test_euler_is_intrinsic_in_bvh_order():
+    a = np.radians([20.0, -35.0, 50.0])
+    expect = axis_rotation("z", a[0]) @ axis_rotation("x", a[1]) @ axis_rotation("y", a[2])
+    np.testing.assert_allclose(euler_to_matrix(a, "ZXY"), expect, atol=1e-12)
+    c, s = np.cos(a[0]), np.sin(a[0])
+    np.testing.assert_allclose(axis_rotation("z", a[0]), [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-12)
+
+
+def test_slerp_halfway_is_half_the_angle():
+    R = np.stack([np.eye(3), axis_rotation("y", np.pi / 2)])[:, None]  # (F=2, 1, 3, 3)
+    mid = slerp_matrices(R, [0.5])[0, 0]
+    np.testing.assert_allclose(mid, axis_rotation("y", np.pi / 4), atol=1e-12)
+
+
+def test_frame_keeps_what_it_is_told_to():
+    f = frame([0.2, 0.3, 1.0], [0, 1, 0], keep="up")
+    np.testing.assert_allclose(f[:, 1], [0, 1, 0])
+    g = frame([0.2, 0.3, 1.0], [0, 1, 0], keep="forward")
+    np.testing.assert_allclose(g[:, 2], np.array([0.2, 0.3, 1.0]) / np.linalg.norm([0.2, 0.3, 1.0]))
+    for m in (f, g):
+        np.testing.assert_allclose(m.T @ m, np.eye(3), atol=1e-12)
+        assert np.linalg.det(m) == pytest.approx(1.0)
+    with pytest.raises(ValueError):
+        frame([0, 2, 0], [0, 1, 0])
+
+
+def test_normals_areas_and_camera_rays():
+    v = np.array([[0, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 3]], float)
+    f = np.array([[0, 1, 2], [0, 3, 1]])
+    np.testing.assert_allclose(triangle_areas(v[f]), [1.0, 3.0])
+    n = vertex_normals(v, f)
+    np.testing.assert_allclose(n[2], [0, 0, 1], atol=1e-12)  # only in the z-facing triangle
+    # vertex 0 sums the unnormalised face normals: (0, 0, 2) (area 1) + (0, 6, 0) (area 3)
+    np.testing.assert_allclose(n[0], np.array([0, 6.0, 2.0]) / np.linalg.norm([0, 6.0, 2.0]), atol=1e-12)
+    K = np.array([[100.0, 0, 50], [0, 80, 40], [0, 0, 1]])
+    R = axis_rotation("y", 0.3)
+    d = camera_ray_matrix(K, R) @ [60.5, 30.5, 1]
+    x_cam = R @ d
+    np.testing.assert_allclose((K @ x_cam)[:2] / (K @ x_cam)[2], [60.5, 30.5])
