@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import signal
 import sys
+import threading
 import warnings
 
 # Modules providing commands, in the order they appear in --help. A module that fails to
@@ -58,19 +61,34 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """Ctrl-C, also when drjit re-raises it from inside a kernel as a RuntimeError."""
-    while exc is not None:
-        if isinstance(exc, KeyboardInterrupt) or "KeyboardInterrupt" in str(exc):
-            return True
-        exc = exc.__cause__ or exc.__context__
-    return False
+def _exit_on_interrupt(prog: str) -> None:
+    """Ctrl-C: remove the temporaries being written, say so on one line, exit 130 at once.
+
+    A KeyboardInterrupt raised inside drjit (our Python sensor runs while a kernel is traced)
+    can leave the renderer hung or abort the interpreter at exit, so the command never lets
+    one reach it: the handler runs at the next point Python gets control and leaves."""
+    from synmitsuba.io.preview import remove_temporaries
+    terminal = os.dup(2)  # the real stderr, also while a library's output is being caught
+    message = f"{prog}: interrupted; files already written are complete, nothing half-written was kept\n"
+
+    def handler(signum, frame):
+        remove_temporaries()
+        sys.stdout.flush()
+        os.write(terminal, message.encode())
+        os._exit(130)
+    previous = signal.signal(signal.SIGINT, handler)
+
+    def restore():
+        signal.signal(signal.SIGINT, previous)
+        os.close(terminal)
+    return restore
 
 
 def _one_line_warnings(prog: str) -> None:
     def show(message, category, filename, lineno, file=None, line=None):
         print(f"{prog}: warning: {message}", file=sys.stderr)
-    warnings.showwarning = show
+    previous, warnings.showwarning = warnings.showwarning, show
+    return previous
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -84,18 +102,18 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     from synmitsuba.errors import SynMitsubaError
     prog = f"synmitsuba {args.command}"
-    _one_line_warnings(prog)
+    show_warning = _one_line_warnings(prog)
+    main_thread = threading.current_thread() is threading.main_thread()
+    restore = _exit_on_interrupt(prog) if main_thread else None
     try:
         return int(args.func(args) or 0)
     except SynMitsubaError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
-    except (KeyboardInterrupt, RuntimeError) as exc:
-        if not _interrupted(exc):
-            raise
-        print(f"{prog}: interrupted; files already written are complete, nothing half-written was kept",
-              file=sys.stderr)
-        return 130
+    finally:
+        warnings.showwarning = show_warning
+        if restore is not None:
+            restore()
 
 
 if __name__ == "__main__":
