@@ -251,11 +251,6 @@ def _frozen(obj) -> bool:
     return getattr(type(obj), "__dataclass_params__").frozen
 
 
-def to_dict(obj) -> dict:
-    """A JSON-ready dict of a dataclass (nested dataclasses and lists included)."""
-    return dataclasses.asdict(obj)
-
-
 class Params:
     """Mixin for parameter dataclasses: ``from_dict`` / ``to_dict`` / ``validate`` through the
     field specs, so a recipe part needs no hand-written validation."""
