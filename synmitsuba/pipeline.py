@@ -73,7 +73,8 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
         for name, cam in sf.cameras:
             if cfg.width or cfg.height:
                 cam = cam.resized(cfg.width or cam.width, cfg.height or cam.height)
-            sample = render(sf.scene, cam, spp=spp, seed=seeds["render"] + k, max_depth=sf.settings.max_depth)
+            sample = render(sf.scene, cam, spp=spp, seed=seeds["render"] + k, max_depth=sf.settings.max_depth,
+                            sampler=sf.settings.sampler, denoise=sf.settings.denoise)
             sample.meta.update(sequence=index, frame=k, camera=name)
             if folder is None:
                 results.append((k, name, sample))

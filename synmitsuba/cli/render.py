@@ -23,7 +23,8 @@ def run(args) -> int:
     for name, cam in tqdm(sf.cameras, desc="views", unit="view", disable=args.quiet):
         if args.res:
             cam = cam.resized(*args.res)
-        sample = render(sf.scene, cam, spp=spp, seed=seed, max_depth=sf.settings.max_depth)
+        sample = render(sf.scene, cam, spp=spp, seed=seed, max_depth=sf.settings.max_depth,
+                        sampler=sf.settings.sampler, denoise=args.denoise or sf.settings.denoise)
         written.append(write_sample(sample, os.path.join(args.out, name)))
     for paths in written:
         print(paths.get("png", paths["exr"]))
@@ -40,5 +41,7 @@ def add_parser(sub) -> None:
                    "each camera's)")
     p.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
     p.add_argument("--seed", type=natural_int, help="render and subject seed (default: the file's render.seed)")
+    p.add_argument("--denoise", choices=("none", "oidn"), help="denoise the RGB with Intel Open Image Denoise, "
+                   "keeping the raw one as rgb_noisy (default: the file's render.denoise)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

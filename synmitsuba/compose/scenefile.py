@@ -15,6 +15,7 @@ import yaml
 
 from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects
 from synmitsuba.errors import ConfigError
+from synmitsuba.render.denoise import DENOISERS, SAMPLERS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, Text, Vector,
                                construct, mapping, optional, spec)
 from synmitsuba.scene import (AreaLight, Camera, Constant, DirectionalLight, EnvMap, Layer, Material, PointLight,
@@ -63,6 +64,8 @@ class RenderSettings(Params):
     seed: int = spec(0, Number(0, 2 ** 32 - 1, integer=True))
     width: int = spec(320, POSITIVE, doc="pixels (cameras may override)")
     height: int = spec(240, POSITIVE)
+    sampler: str = spec("auto", Choice(SAMPLERS), doc="auto: the best that keeps spp exactly")
+    denoise: str = spec("none", Choice(DENOISERS), doc="oidn: Intel Open Image Denoise (synmitsuba[denoise])")
 
 
 @dataclass

@@ -18,11 +18,12 @@ import numpy as np
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.render import sensor as sensor_mod
 from synmitsuba.render.build import build
+from synmitsuba.render.denoise import DENOISERS, choose_sampler, guides, oidn
 from synmitsuba.render.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
-from synmitsuba.schema import Number
+from synmitsuba.schema import Choice, Number
 
 POSITIVE = Number(1, integer=True)
 
@@ -38,13 +39,16 @@ def _integrator(max_depth: int):
 
 
 def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6,
-           coverage_samples: int = 16, rfilter: str = "box") -> Sample:
+           coverage_samples: int = 16, rfilter: str = "box", sampler: str = "auto", denoise: str = "none") -> Sample:
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
-    bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``."""
+    bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``.
+    ``sampler``: ``auto`` (the best that keeps spp exactly, see ``render.denoise``) or a Mitsuba
+    sampler; ``denoise="oidn"`` denoises ``rgb`` and keeps the raw one as ``rgb_noisy``."""
     import mitsuba as mi
     spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
                                         (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
     seed = Number(0, 2 ** 32 - 1, integer=True)("seed", seed)
+    Choice(DENOISERS)("denoise", denoise)
     if not isinstance(camera, Camera):
         raise ConfigError("camera", type(camera).__name__, "give a synmitsuba.Camera")
     if scene.environment is None and not scene.lights:
@@ -56,21 +60,25 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     t0 = time.perf_counter()
     built = build(scene)
     t1 = time.perf_counter()
-    sensor = mi.load_dict(sensor_mod.sensor_dict(camera, spp, rfilter))
-    rgb = np.array(mi.render(built.mi_scene, sensor=sensor, integrator=_integrator(max_depth),
+    chosen = choose_sampler(sampler, spp)
+    sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, chosen)
+    rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth),
                              spp=spp, seed=seed), dtype=np.float32)[..., :3]
+    extra = {}
+    if denoise == "oidn":
+        extra["rgb_noisy"], rgb = rgb, oidn(rgb, *guides(built.mi_scene, sensor_dict, seed))
     t2 = time.perf_counter()
     passes = exact_passes(built, camera)
     passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed)
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
-            "variant": variant, "rfilter": rfilter}
+            "variant": variant, "rfilter": rfilter, "sampler": chosen, "denoise": denoise}
     timings = {"build": t1 - t0, "rgb": t2 - t1, "exact": t3 - t2}
     cov = passes.pop("coverage")
     if not passes["mask"].any():
         warnings.warn(SynMitsubaWarning("the camera sees no geometry: every pixel is background; check the "
                                         "camera's position, target and field of view"), stacklevel=2)
-    return Sample(camera=camera, passes={"rgb": rgb, **passes}, coverage=cov, meta=meta, timings=timings)
+    return Sample(camera=camera, passes={"rgb": rgb, **extra, **passes}, coverage=cov, meta=meta, timings=timings)
 
 
 def strata(n: int) -> tuple[int, int]:
@@ -95,7 +103,8 @@ def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None):
         ox = oy = mi.Float(0.5)
     else:
         rows, cols = strata(per_pixel)
-        rng = mi.PCG32(size=H * W * per_pixel, initstate=mi.UInt64(idx), initseq=mi.UInt64(seed))
+        # the seed is opaque: a new seed (every frame of a sequence) reuses the compiled kernel
+        rng = mi.PCG32(size=H * W * per_pixel, initstate=mi.UInt64(idx), initseq=dr.opaque(mi.UInt64, seed))
         ox = (mi.Float(k % cols) + rng.next_float32()) / cols
         oy = (mi.Float(k // cols) + rng.next_float32()) / rows
     M = mi.Matrix3f(camera.ray_matrix.tolist())
