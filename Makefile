@@ -50,6 +50,7 @@ bench: setup
 	$(PY) -m pytest -q -m slow
 	$(PY) bench/import_time.py
 	$(PY) bench/render_passes.py
+	$(PY) bench/frame_cost.py --frames 30
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
 	$(PY) bench/subjects_robustness.py 200

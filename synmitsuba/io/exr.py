@@ -2,7 +2,7 @@
 
 Channels come from the pass registry (``synmitsuba.sample.PASSES``): R G B A, depth.Z,
 normal.X/Y/Z, position.X/Y/Z, uv.U/V (float32); mask, uv.valid, instance, layer (uint32); plus
-coverage.<id> (half: soft mask of each instance). The camera (OpenCV K, R, t, size) and render
+coverage.<id> (float32: soft mask of each instance). The camera (OpenCV K, R, t, size) and render
 settings are in the EXR header (``synmitsuba`` attribute, JSON) and in ``<stem>.json``. Files are written under a
 temporary name and renamed, so a crash never leaves a half-written sample that looks complete.
 """
@@ -32,8 +32,8 @@ def _channels(sample: Sample) -> dict[str, np.ndarray]:
         comps = [arr] if spec.components == 1 else [arr[..., i] for i in range(spec.components)]
         for cname, comp in zip(spec.channels, comps):
             ch[cname] = np.ascontiguousarray(comp, dtype=_EXR_DTYPE[spec.exr_type])
-    for inst, frac in sample.coverage.items():  # k / samples: exact in half precision for samples <= 2048
-        ch[f"coverage.{inst}"] = np.ascontiguousarray(frac, dtype=np.float16)
+    for inst, frac in sample.coverage.items():  # float32: k / n is not exact in half precision for n = 9
+        ch[f"coverage.{inst}"] = np.ascontiguousarray(frac, dtype=np.float32)
     return ch
 
 

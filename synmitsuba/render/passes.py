@@ -39,11 +39,13 @@ def _integrator(max_depth: int):
 
 
 def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6,
-           coverage_samples: int = 16, rfilter: str = "box", sampler: str = "auto", denoise: str = "none") -> Sample:
+           coverage_samples: int = 9, rfilter: str = "box", sampler: str = "auto", denoise: str = "none") -> Sample:
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
     bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``.
     ``sampler``: ``auto`` (the best that keeps spp exactly, see ``render.denoise``) or a Mitsuba
-    sampler; ``denoise="oidn"`` denoises ``rgb`` and keeps the raw one as ``rgb_noisy``."""
+    sampler; ``denoise="oidn"`` denoises ``rgb`` and keeps the raw one as ``rgb_noisy``.
+    ``coverage_samples`` (alpha, per-instance coverage): 9 by measurement on the demo's edge
+    pixels against 256 rays, RMS error 0.43 / 0.14 / 0.069 / 0.059 for 1 / 4 / 9 / 16 rays."""
     import mitsuba as mi
     spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
                                         (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
@@ -65,6 +67,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth),
                              spp=spp, seed=seed), dtype=np.float32)[..., :3]
     extra = {}
+    t_rgb = time.perf_counter()
     if denoise == "oidn":
         extra["rgb_noisy"], rgb = rgb, oidn(rgb, *guides(built.mi_scene, sensor_dict, seed))
     t2 = time.perf_counter()
@@ -73,7 +76,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
             "variant": variant, "rfilter": rfilter, "sampler": chosen, "denoise": denoise}
-    timings = {"build": t1 - t0, "rgb": t2 - t1, "exact": t3 - t2}
+    timings = {"build": t1 - t0, "rgb": t_rgb - t1, "denoise": t2 - t_rgb, "exact": t3 - t2}
     cov = passes.pop("coverage")
     if not passes["mask"].any():
         warnings.warn(SynMitsubaWarning("the camera sees no geometry: every pixel is background; check the "
