@@ -13,14 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.compose.scenefile import load_scene_file, read_scene_doc
+from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
 from synmitsuba.compose.subjects import add_subjects
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.exr import write_sample
 from synmitsuba.render.passes import render
-from synmitsuba.schema import Number, Params, Text, optional, spec
-
-POSITIVE = Number(1, integer=True)
+from synmitsuba.schema import POSITIVE, Number, Params, Text, optional, spec
 
 
 @dataclass
@@ -61,7 +59,7 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
         raise ConfigError("index", index, "give a sequence index >= 0")
     doc = read_scene_doc(cfg.scene)  # checked in full before any building
     seeds = sequence_seeds(cfg.seed, index)
-    sf = load_scene_file(cfg.scene, subjects=False)
+    sf = scene_from_doc(doc, cfg.scene, subjects=False)
     base = os.path.dirname(os.path.abspath(cfg.scene))
     placed = add_subjects(sf.scene, _subject_entries(doc, seeds), seed=seeds["motions"], base=base)
     spp = cfg.spp or sf.settings.spp

@@ -1,8 +1,7 @@
 """One validation layer for recipes, scene files and configs.
 
 Fields of a dataclass declare what they accept with ``spec(default, Check)``; ``from_dict``
-turns a mapping (parsed YAML/JSON) into the dataclass, and ``validate`` checks an instance
-built in code. Every error is a ``ConfigError`` naming the full key path
+turns a mapping (parsed YAML/JSON) into the dataclass. Every error is a ``ConfigError`` naming the full key path
 (``subjects[2].motion``, ``recipe.garments[0].texture.pattern``), the value and the fix; an
 unknown key lists the keys that exist.
 
@@ -97,6 +96,9 @@ class Vector(Check):
             rng = f" in [{self.low}, {self.high}]" if self.low is not None and self.high is not None else ""
             raise ConfigError(where, value, f"give {self.n} numbers{rng}" + (f" ({self.what})" if self.what else ""))
         return [float(x) for x in arr]
+
+
+POSITIVE = Number(1, integer=True)  # counts: spp, pixels, frames
 
 
 @dataclasses.dataclass(frozen=True)
@@ -230,30 +232,9 @@ def construct(cls, values: dict, where: str):
         raise ConfigError(_join(where, field) if where else exc.field, exc.value, exc.fix) from None
 
 
-def validate(obj, where: str = ""):
-    """Check every field of a dataclass instance built in code; returns ``obj``."""
-    for f in dataclasses.fields(obj):
-        check = f.metadata.get("check")
-        if check is not None:
-            value = getattr(obj, f.name)
-            checked = check(_join(where, f.name), value)
-            if not isinstance(check, (Nested, ListOf, _Optional)):
-                object.__setattr__(obj, f.name, checked) if _frozen(obj) else setattr(obj, f.name, checked)
-            elif isinstance(check, Nested):
-                validate(value, _join(where, f.name))
-            elif isinstance(check, ListOf) and isinstance(check.item, Nested):
-                for i, v in enumerate(value):
-                    validate(v, f"{_join(where, f.name)}[{i}]")
-    return obj
-
-
-def _frozen(obj) -> bool:
-    return getattr(type(obj), "__dataclass_params__").frozen
-
-
 class Params:
-    """Mixin for parameter dataclasses: ``from_dict`` / ``to_dict`` / ``validate`` through the
-    field specs, so a recipe part needs no hand-written validation."""
+    """Mixin for parameter dataclasses: ``from_dict`` / ``to_dict`` through the field specs, so
+    a recipe part needs no hand-written validation."""
 
     @classmethod
     def from_dict(cls, data, where: str = ""):
@@ -261,6 +242,3 @@ class Params:
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
-
-    def validate(self, where: str = ""):
-        return validate(self, where)

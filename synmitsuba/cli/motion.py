@@ -27,20 +27,15 @@ def _figure_scene(motion, f: int, human=None):
 
 def preview(args) -> int:
     import synmitsuba as sm
-    from synmitsuba.motion.sources import load_motion
-    load_motion_args = dict(rng=np.random.default_rng(args.seed), seconds=args.seconds, field="CLIP")
-    if not os.path.isfile(args.clip):  # a kind name: checked before anything heavy
-        from synmitsuba.motion.sources import motion_source_kind
-        try:
-            motion_source_kind(args.clip)
-        except sm.ConfigError as exc:
-            raise sm.ConfigError("CLIP", exc.value, exc.fix) from None
+    from synmitsuba.motion.sources import check_motion_source, load_motion
+    check_motion_source(args.clip, field="CLIP")  # before anything heavy
     output_dir(args.out)
     sm.set_variant(args.variant)
-    motion = load_motion(args.clip, **load_motion_args)
+    rng = np.random.default_rng(args.seed)
+    motion = load_motion(args.clip, rng, seconds=args.seconds, field="CLIP")
     human = None
     if not args.stick:
-        human = sm.build_subject(sm.sample_subject(load_motion_args["rng"]))
+        human = sm.build_subject(sm.sample_subject(rng))
         motion = sm.retarget(motion, human.skeleton)
     frames = np.linspace(0, motion.n_frames - 1, args.frames).round().astype(int)
     pelvis = motion.joint_positions()[:, 0]

@@ -9,14 +9,14 @@ from synmitsuba.cli.args import natural_int, output_dir, positive_int, resolutio
 def run(args) -> int:
     from tqdm import tqdm
 
-    from synmitsuba.compose.scenefile import load_scene_file, read_scene_doc
+    from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
     from synmitsuba.io.exr import write_sample
     from synmitsuba.render.passes import render
     from synmitsuba.render.variant import set_variant
-    read_scene_doc(args.scene)  # every key checked before anything is built
+    doc = read_scene_doc(args.scene)  # every key checked before anything is built
     output_dir(args.out)
     set_variant(args.variant)
-    sf = load_scene_file(args.scene, seed=args.seed)
+    sf = scene_from_doc(doc, args.scene, seed=args.seed)
     spp = args.spp if args.spp is not None else sf.settings.spp
     seed = args.seed if args.seed is not None else sf.settings.seed
     written = []

@@ -16,7 +16,7 @@ import yaml
 from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects
 from synmitsuba.errors import ConfigError
 from synmitsuba.render.denoise import DENOISERS, SAMPLERS
-from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, Text, Vector,
+from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
                                construct, mapping, optional, spec)
 from synmitsuba.scene import (AreaLight, Camera, Constant, DirectionalLight, EnvMap, Layer, Material, PointLight,
                               Scene, SunSky)
@@ -25,7 +25,6 @@ PRIMITIVES = ("box", "icosphere", "uv_sphere", "cylinder", "capsule", "cone", "t
 ENVIRONMENTS = {"constant": Constant, "sunsky": SunSky, "envmap": EnvMap}
 LIGHTS = {"point": PointLight, "directional": DirectionalLight, "area": AreaLight}
 MATERIAL_KEYS = ("kind", "base_color", "roughness", "metallic", "specular", "two_sided", "melanin", "redness")
-POSITIVE = Number(1, integer=True)
 
 
 class _Typed(Check):
@@ -218,10 +217,13 @@ def load_scene_file(path: str, seed: int | None = None, subjects: bool = True) -
     """Parse a YAML scene file into a Scene with its objects, lights, environment and (unless
     ``subjects=False``) its subjects posed; plus its cameras and render settings. ``seed``
     (default ``render.seed``) seeds the subjects' motions."""
-    doc = read_scene_doc(path)
+    return scene_from_doc(read_scene_doc(path), path, seed, subjects)
+
+
+def scene_from_doc(doc: SceneDoc, path: str, seed: int | None = None, subjects: bool = True) -> SceneFile:
+    """``load_scene_file`` for a document already read (``read_scene_doc``); relative paths
+    are taken from ``path``'s folder."""
     base = os.path.dirname(os.path.abspath(path))
-    for i, entry in enumerate(doc.subjects):
-        entry.check_files(f"subjects[{i}]", base)
     materials = {name: _material(m, {}, f"materials.{name}") for name, m in doc.materials.items()}
     scene = Scene()
     for i, obj in enumerate(doc.objects):

@@ -14,7 +14,7 @@ from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.motion import Motion
 from synmitsuba.motion.retargeting import retarget
-from synmitsuba.motion.sources import load_motion, motion_source_kind
+from synmitsuba.motion.sources import check_motion_source, load_motion
 from synmitsuba.schema import AnyOf, Nested, Number, Params, Text, Vector, optional, spec
 
 
@@ -31,12 +31,7 @@ class SubjectEntry(Params):
 
     def check_files(self, where: str, base: str) -> None:
         """Fail now (before any subject is built) on a bad motion or a missing file."""
-        try:
-            kind = motion_source_kind(self.motion)
-        except ConfigError as exc:
-            raise ConfigError(f"{where}.motion", exc.value, exc.fix) from None
-        if kind != "procedural" and not os.path.isfile(os.path.join(base, self.motion)):
-            raise ConfigError(f"{where}.motion", self.motion, "no such file; paths are relative to the scene file")
+        check_motion_source(self.motion, base, f"{where}.motion")
         if self.recipe is not None and not os.path.isfile(os.path.join(base, self.recipe)):
             raise ConfigError(f"{where}.recipe", self.recipe, "no such recipe file; paths are relative to the scene file")
 

@@ -52,7 +52,8 @@ def choose_sampler(name: str, spp: int) -> str:
     return name
 
 
-def _aov_integrator():
+@functools.lru_cache(maxsize=4)
+def _aov_integrator(variant: str):
     import mitsuba as mi
     return mi.load_dict({"type": "aov", "aovs": "albedo:albedo,nn:sh_normal"})
 
@@ -61,7 +62,7 @@ def guides(mi_scene, sensor_dict: dict, seed: int) -> tuple[np.ndarray, np.ndarr
     """(albedo, normal) (H, W, 3) float32 of the primary hits, averaged over each pixel."""
     import mitsuba as mi
     sensor = mi.load_dict({**sensor_dict, "sampler": {"type": "independent", "sample_count": GUIDE_SPP}})
-    img = np.array(mi.render(mi_scene, sensor=sensor, integrator=_aov_integrator(), spp=GUIDE_SPP, seed=seed))
+    img = np.array(mi.render(mi_scene, sensor=sensor, integrator=_aov_integrator(mi.variant()), spp=GUIDE_SPP, seed=seed))
     return np.ascontiguousarray(img[..., 0:3], np.float32), np.ascontiguousarray(img[..., 3:6], np.float32)
 
 

@@ -7,6 +7,7 @@ rays that hit geometry (``ray_intersect_preliminary``, about half the cost).
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 import warnings
@@ -23,9 +24,7 @@ from synmitsuba.render.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
-from synmitsuba.schema import Choice, Number
-
-POSITIVE = Number(1, integer=True)
+from synmitsuba.schema import POSITIVE, Choice, Number
 
 _integrators: dict = {}
 
@@ -128,6 +127,11 @@ class Hit:
     camera: Camera
     built: object
 
+    @functools.cached_property
+    def has_uv(self):
+        """Whether each hit shape has texture coordinates (shared by the uv and uv_valid passes)."""
+        return self.built.lookup("has_uv", self.reg, self.hit) > 0
+
 
 # pass name -> function(Hit) -> drjit array (one value or vector per pixel)
 EXACT_PASSES: dict[str, Callable] = {}
@@ -171,7 +175,7 @@ def _position(h: Hit):
 
 @exact_pass("uv_valid")
 def _uv_valid(h: Hit):
-    return h.built.lookup("has_uv", h.reg, h.hit) > 0
+    return h.has_uv
 
 
 @exact_pass("uv")
@@ -179,7 +183,7 @@ def _uv(h: Hit):
     import drjit as dr
     import mitsuba as mi
     # Mitsuba reports barycentric-like coordinates on shapes without uv: those become 0
-    return dr.select(_uv_valid(h), mi.Point2f(h.si.uv.x, 1.0 - h.si.uv.y), 0.0)  # back to v up
+    return dr.select(h.has_uv, mi.Point2f(h.si.uv.x, 1.0 - h.si.uv.y), 0.0)  # back to v up
 
 
 @exact_pass("instance")

@@ -12,9 +12,7 @@ import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import camera_ray_matrix, frame
-from synmitsuba.schema import Number
-
-PIXELS = Number(1, integer=True)  # image sizes, in pixels
+from synmitsuba.schema import POSITIVE as PIXELS
 
 
 def _matrix(name: str, value, shape) -> np.ndarray:
