@@ -9,7 +9,7 @@ export ANNY_CACHE_DIR ?= $(CURDIR)/.cache/anny
 export WARP_CACHE_PATH ?= $(CURDIR)/.cache/warp
 export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
 
-PROBE := $(PY) -c "from synmitsuba.render.llvm import main; raise SystemExit(main(['--probe']))"
+PROBE := $(PY) -c "from synmitsuba.engine.llvm import main; raise SystemExit(main(['--probe']))"
 
 .PHONY: setup llvm demo test test-all bench clean
 

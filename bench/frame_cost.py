@@ -35,7 +35,7 @@ def main(argv=None) -> dict:
 
     import synmitsuba as sm
     from synmitsuba.compose.stage import preview_stage
-    from synmitsuba.render.build import STATS, build
+    from synmitsuba.engine.build import STATS, build
     from synmitsuba.render.denoise import choose_sampler
     sm.set_variant()
     scene = preview_stage()

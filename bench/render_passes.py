@@ -27,7 +27,7 @@ def main(res: int = 512, spp: int = 64) -> dict:
 
     import synmitsuba as sm
     from synmitsuba.compose.scenefile import load_scene_file
-    from synmitsuba.render.variant import thread_count
+    from synmitsuba.engine.variant import thread_count
     sm.set_variant()
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     sf = load_scene_file(ROOT / "scenes" / "demo.yaml", subjects=False)  # the objects alone, as recorded

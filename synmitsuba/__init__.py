@@ -17,7 +17,7 @@ _FROM = {
     "synmitsuba.scene": ("Camera", "Layer", "Material", "Constant", "SunSky", "EnvMap", "PointLight",
                          "DirectionalLight", "AreaLight", "Scene", "MeshShape", "CurveShape"),
     "synmitsuba.sample": ("Sample", "PASSES", "register_pass"),
-    "synmitsuba.render.variant": ("set_variant", "current_variant"),
+    "synmitsuba.engine.variant": ("set_variant", "current_variant"),
     "synmitsuba.io": ("write_sample", "read_sample", "SampleDataset", "list_samples", "to_srgb8", "write_png",
                       "contact_sheet"),
     "synmitsuba.body": ("SubjectRecipe", "sample_subject", "build_subject", "LayeredHuman", "PosedLayer", "Skeleton",

@@ -114,7 +114,7 @@ def test_scene_file_errors_name_the_full_path_before_building(sm, tmp_path, monk
 
 
 def test_sequence_index_is_reproducible_and_moves_everything_in_place(sm, tmp_path):
-    from synmitsuba.render.build import STATS
+    from synmitsuba.engine.build import STATS
     (tmp_path / "p.yaml").write_text(PEOPLE)
     cfg = sm.SequenceConfig(scene=str(tmp_path / "p.yaml"), frames=3, stride=4)
     loads = STATS["loads"]

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from synmitsuba.errors import ConfigError, LLVMError
-from synmitsuba.render import llvm
+from synmitsuba.engine import llvm
 
 TRI = np.array([[0, 1, 2]])
 V3 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)

@@ -57,7 +57,7 @@ def test_animation_compiles_no_render_kernel_after_the_second_frame(sm):
     counted: they compile in microseconds, the render kernels in seconds."""
     import drjit as dr
 
-    from synmitsuba.render.build import STATS
+    from synmitsuba.engine.build import STATS
     human = sm.build_subject(sm.sample_subject(np.random.default_rng(2), {"hair_style": "short", "texture_size": 64}))
     clip = sm.retarget(sm.procedural_motion("walk", np.random.default_rng(0), seconds=0.5), human.skeleton)
     scene = sm.Scene()

@@ -20,7 +20,7 @@ def run(args) -> int:
     if variant.startswith("llvm"):
         rows.append(("libLLVM", ".".join(map(str, dr.detail.llvm_version()))
                      + f" ({os.environ.get('DRJIT_LIBLLVM_PATH', 'drjit default search')})"))
-    from synmitsuba.render.variant import thread_count
+    from synmitsuba.engine.variant import thread_count
     rows.append(("threads", str(thread_count())))
     width = max(len(k) for k, _ in rows)
     for k, v in rows:

@@ -15,7 +15,7 @@ import yaml
 
 from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects
 from synmitsuba.errors import ConfigError
-from synmitsuba.render.denoise import DENOISERS, SAMPLERS
+from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
                                construct, mapping, optional, spec)
 from synmitsuba.scene import (AreaLight, Camera, Constant, DirectionalLight, EnvMap, Layer, Material, PointLight,

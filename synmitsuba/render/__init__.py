@@ -1,4 +1,4 @@
-"""Rendering: variant selection, Mitsuba scene building, the RGB and exact geometry passes.
+"""Rendering: the path-traced RGB and the exact geometry passes (on ``synmitsuba.engine``).
 
 ``synmitsuba.render`` is this package and, called, the ``render`` function
 (``sm.render(scene, camera, spp=16)``, see ``synmitsuba.render.passes.render``): one name for
@@ -10,7 +10,7 @@ import types as _types
 from synmitsuba._lazy import lazy_exports
 
 __getattr__, __dir__ = lazy_exports(__name__, {
-    "set_variant": "synmitsuba.render.variant", "current_variant": "synmitsuba.render.variant",
+    "set_variant": "synmitsuba.engine.variant", "current_variant": "synmitsuba.engine.variant",
     "exact_pass": "synmitsuba.render.passes", "Sample": "synmitsuba.sample"})
 __all__ = ["set_variant", "current_variant", "exact_pass"]
 

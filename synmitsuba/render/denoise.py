@@ -18,10 +18,8 @@ import functools
 
 import numpy as np
 
+from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.errors import ConfigError
-
-SAMPLERS = ("auto", "ldsampler", "multijitter", "stratified", "independent")
-DENOISERS = ("none", "oidn")
 GUIDE_SPP = 16
 
 

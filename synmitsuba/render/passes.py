@@ -18,9 +18,9 @@ import numpy as np
 
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.render import sensor as sensor_mod
-from synmitsuba.render.build import build
+from synmitsuba.engine.build import build
 from synmitsuba.render.denoise import DENOISERS, choose_sampler, guides, oidn
-from synmitsuba.render.variant import current_variant
+from synmitsuba.engine.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene

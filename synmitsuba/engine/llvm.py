@@ -3,7 +3,7 @@
 drjit needs libLLVM >= 16: it refuses 14 and *aborts the process* inside the JIT with 15
 ("Cannot select: fminimum"). So we pick the newest libLLVM on the machine ourselves (setting
 ``DRJIT_LIBLLVM_PATH`` before drjit loads) and, when its version cannot be told from the file
-name, run a tiny render in a subprocess first.  ``python -m synmitsuba.render.llvm --probe``
+name, run a tiny render in a subprocess first.  ``python -m synmitsuba.engine.llvm --probe``
 exits 0 when the LLVM backend works (the Makefile uses it to decide whether to install one).
 """
 from __future__ import annotations
@@ -103,7 +103,7 @@ def probe(timeout: float = 120.0) -> tuple[bool, str]:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv != ["--probe"]:
-        print("usage: python -m synmitsuba.render.llvm --probe", file=sys.stderr)
+        print("usage: python -m synmitsuba.engine.llvm --probe", file=sys.stderr)
         return 2
     ok, msg = probe()
     print(("ok: " if ok else "broken: ") + msg, file=sys.stdout if ok else sys.stderr)

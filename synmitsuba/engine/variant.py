@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 
 from synmitsuba.errors import ConfigError, LLVMError
-from synmitsuba.render import llvm
+from synmitsuba.engine import llvm
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _state: dict = {"variant": None, "threads": None}
