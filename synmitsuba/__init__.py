@@ -25,8 +25,9 @@ _FROM = {
     "synmitsuba.motion": ("Motion", "load_bvh", "parse_bvh", "BVHError", "load_amass", "smplx_skeleton",
                           "procedural_motion", "MOTION_KINDS", "foot_sliding", "retarget", "humanoid_skeleton",
                           "MotionLibrary", "random_window", "is_allowed", "load_motion"),
-    "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry"),
-    "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index"),
+    "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry", "compose_scene",
+                           "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
+    "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}
 _EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function

@@ -4,6 +4,11 @@ sequence is the same whoever renders it, in whatever order.
 
     cfg = sm.SequenceConfig(scene="scenes/demo.yaml", frames=4, stride=5)
     stems = sm.render_sequence_index(cfg, index=7, out="out/dataset")   # out/dataset/seq_000007/...
+
+A composed scene (``sm.compose_scene``) renders with ``render_sequence``:
+
+    for frame, view, sample in sm.render_sequence(spec, frames=range(0, 60, 10), spp=16, seed=3):
+        sm.write_sample(sample, f"out/{view}_{frame:04d}")
 """
 from __future__ import annotations
 
@@ -14,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
+from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.compose.subjects import add_subjects
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.exr import write_sample
@@ -81,3 +87,30 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
                 write_sample(sample, stem)
                 results.append(stem)
     return results
+
+
+def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, **render_args):
+    """Yield ``(frame, view name, Sample)`` for every frame (default all) and view (default
+    all) of a composed scene, frame by frame; subjects move in place (vertices and hair
+    curves), so no frame after the first reloads the Mitsuba scene. The sample of frame f
+    is rendered with seed ``seed + f``; its meta holds the frame, view, camera motion kind
+    and each subject's occlusion, in-view share and validity in that view."""
+    if not isinstance(spec, SceneSpec):
+        raise ConfigError("spec", type(spec).__name__, "give a SceneSpec (sm.compose_scene or SceneSpec.from_json)")
+    names = [v.name for v in spec.views] if views is None else [spec.view(n).name for n in views]
+    frames = range(spec.n_frames) if frames is None else frames
+    for f in frames:
+        if isinstance(f, bool) or not isinstance(f, (int, np.integer)) or not 0 <= f < spec.n_frames:
+            raise ConfigError("frames", f, f"give frame indices in [0, {spec.n_frames - 1}]")
+    scene, placed = spec.build()
+    for f in frames:
+        for p in placed:
+            p.pose_in(scene, int(f))
+        for name in names:
+            view = spec.view(name)
+            sample = render(scene, view.cameras[f], spp=spp, seed=seed + int(f), **render_args)
+            sample.meta.update(frame=int(f), view=name, camera_motion=view.kind,
+                               subjects=[{"instance": s.instance, "occlusion": float(o), "in_view": float(i),
+                                          "valid": bool(v)} for s, o, i, v in
+                                         zip(spec.subjects, view.occlusion, view.in_view, view.valid)])
+            yield int(f), name, sample

@@ -101,6 +101,19 @@ class Vector(Check):
 POSITIVE = Number(1, integer=True)  # counts: spp, pixels, frames
 
 
+class Range(Vector):
+    """``[low, high]`` with low <= high, both within the bounds: a range to draw from."""
+
+    def __init__(self, low: float | None = None, high: float | None = None, what: str = ""):
+        super().__init__(2, low, high, what)
+
+    def __call__(self, where: str, value):
+        lo, hi = super().__call__(where, value)
+        if lo > hi:
+            raise ConfigError(where, value, "give [low, high] with low <= high" + (f" ({self.what})" if self.what else ""))
+        return [lo, hi]
+
+
 @dataclasses.dataclass(frozen=True)
 class Text(Check):
     def __call__(self, where: str, value):

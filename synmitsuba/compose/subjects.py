@@ -52,13 +52,13 @@ class PlacedSubject:
         self.human.add_to(scene, *self.motion.frame(f), instance=self.instance, prefix=self.prefix)
 
 
-def place_motion(motion: Motion, position, yaw_deg: float) -> Motion:
+def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) -> Motion:
     """The clip turned by ``yaw_deg`` and moved so its mean ground position is ``position``
-    ([x, z] or [x, y, z] metres)."""
+    ([x, z] or [x, y, z] metres), raised by ``lift`` metres."""
     pos = np.asarray(position, dtype=np.float64)
     centre = motion.joint_positions()[:, 0].mean(0)
     centred = motion.moved(0.0, [-centre[0], 0.0, -centre[2]])
-    return centred.moved(float(yaw_deg), [pos[0], 0.0, pos[-1]])
+    return centred.moved(float(yaw_deg), [pos[0], float(lift), pos[-1]])
 
 
 def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str = "subjects") -> list[PlacedSubject]:

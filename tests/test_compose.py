@@ -1,0 +1,235 @@
+"""Scene composition: environments, whole-clip placement, cameras scored by ray-cast occlusion,
+camera motion, the SceneSpec round trip and sequences rendered in place."""
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from synmitsuba.compose import cameras as cams
+from synmitsuba.compose.environments import environment_names, load_environment, object_boxes
+from synmitsuba.compose.placement import PlacementConfig, envelope, frame_boxes, overlap_area, place_subjects
+from synmitsuba.errors import ConfigError, SynMitsubaWarning
+
+SMALL = {"environments": ["plaza"],
+         "subjects": {"count": 2, "seconds": 0.5, "motions": ["walk", "jog"], "config": {"texture_size": 64}},
+         "cameras": {"count": 3, "width": 64, "height": 48, "azimuths": 12, "shells": 2, "pitches": 2, "points": 64,
+                     "score_frames": 2, "motion": list(cams.MOTIONS), "principal_jitter": 0.05}}
+
+
+@pytest.fixture(scope="module")
+def spec(sm):
+    return sm.compose_scene(SMALL, np.random.default_rng(5), seed=5)
+
+
+def _walker(rng, frames=20):
+    """Per-frame hulls of a box-shaped body walking a random straight line (centred clip)."""
+    w, d = rng.uniform(0.3, 0.7, 2)
+    step = rng.uniform(-0.06, 0.06, 2)
+    box = np.array([[-w, -d], [w, -d], [w, d], [-w, d]]) / 2
+    path = (np.arange(frames)[:, None] - (frames - 1) / 2) * step
+    return [box + p for p in path]
+
+
+def test_placement_never_overlaps_in_100_compositions():
+    """Random walkers in every environment: whole-clip boxes clear of objects and of each other
+    by the margin, and at every frame no two per-frame boxes meet; all inside the area."""
+    rng = np.random.default_rng(0)
+    envs = [load_environment(n) for n in environment_names()]
+    placed_total = 0
+    for k in range(100):
+        env = envs[k % len(envs)]
+        objects = object_boxes(env)[:, [0, 2, 3, 5]]
+        cfg = PlacementConfig(grid_step=0.2, group_radius=float(rng.uniform(1.5, 4)))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SynMitsubaWarning)
+            placed = place_subjects([_walker(rng) for _ in range(int(rng.integers(2, 7)))], env.area, objects, cfg, rng)
+        placed_total += len(placed)
+        feet = np.array([p.footprint for p in placed])
+        grown = objects + np.array([-1, -1, 1, 1]) * cfg.margin
+        assert (overlap_area(feet[:, None], grown[None]) == 0).all()
+        assert (feet[:, :2] >= np.array(env.area[:2]) - 1e-9).all() and (feet[:, 2:] <= np.array(env.area[2:]) + 1e-9).all()
+        for i in range(len(placed)):
+            for j in range(i):
+                assert overlap_area(feet[i], feet[j]) == 0
+                assert (overlap_area(placed[i].frames, placed[j].frames) == 0).all()
+            assert np.allclose(envelope(placed[i].frames), placed[i].footprint)
+    assert placed_total > 250  # the group constraint still lets most scenes hold several people
+
+
+def test_frame_boxes_turn_like_a_placed_clip():
+    """frame_boxes(yaw) must match the boxes of points moved as Motion.moved moves a clip."""
+    from synmitsuba.geometry import axis_rotation
+    rng = np.random.default_rng(1)
+    pts = [rng.normal(size=(30, 3)) for _ in range(3)]
+    yaw = 37.0
+    R = axis_rotation("y", np.radians(yaw))
+    got = frame_boxes([p[:, [0, 2]] for p in pts], yaw, (1.5, -2.0))
+    moved = [p @ R.T + [1.5, 0, -2.0] for p in pts]
+    want = np.array([[m[:, 0].min(), m[:, 2].min(), m[:, 0].max(), m[:, 2].max()] for m in moved])
+    assert np.allclose(got, want)
+
+
+def test_impossible_placement_is_an_error_or_fewer_subjects():
+    env = load_environment("gallery")
+    huge = [[np.array([[-3.0, -3], [3, -3], [3, 3], [-3, 3]])]]
+    with pytest.raises(ConfigError, match="subjects.*does not fit"):
+        place_subjects(huge, env.area, object_boxes(env)[:, [0, 2, 3, 5]], PlacementConfig(), np.random.default_rng(0))
+    rng = np.random.default_rng(0)
+    many = [_walker(rng) for _ in range(12)]
+    with pytest.warns(SynMitsubaWarning, match="placing [0-9]+ of 12 subjects"):
+        placed = place_subjects(many, [-1.5, -1.5, 1.5, 1.5], np.zeros((0, 4)), PlacementConfig(), rng)
+    assert 1 <= len(placed) < 12
+
+
+def test_composed_subjects_stand_apart_on_the_ground_at_every_frame(sm, spec):
+    """The real meshes: feet on the ground, every frame's posed vertices inside the recorded
+    per-frame box, and the subjects' meshes apart (nearest vertices) at every frame."""
+    from scipy.spatial import cKDTree
+    scene, placed = spec.build()
+    lows = []
+    for f in range(spec.n_frames):
+        verts = []
+        for s, p in zip(spec.subjects, placed):
+            v = np.concatenate([lay.vertices for lay in p.human.pose(*p.motion.frame(f)) if not lay.is_curves])
+            box = s.frames[f]
+            assert box[0] - 1e-6 <= v[:, 0].min() and v[:, 0].max() <= box[2] + 1e-6
+            assert box[1] - 1e-6 <= v[:, 2].min() and v[:, 2].max() <= box[3] + 1e-6
+            verts.append(v)
+            lows.append(v[:, 1].min())
+        assert cKDTree(verts[0]).query(verts[1])[0].min() > 0.05
+    lows = np.reshape(lows, (spec.n_frames, -1))
+    assert (lows > -1e-6).all() and np.allclose(lows.min(0), 0, atol=1e-6)  # never sunk; touching at least once
+    p.pose_in(scene, 0)
+
+
+def test_cameras_keep_their_bounds_at_every_frame(spec):
+    """Distance to the group centre in [L_min, L_max], pitch in range and the eye outside every
+    object and subject box, recomputed from each frame's R and t."""
+    cfg = cams.CameraConfig.from_dict(SMALL["cameras"])
+    env = load_environment(spec.environment)
+    objects = object_boxes(env)
+    centre = np.mean([[(s.footprint[0] + s.footprint[2]) / 2, cfg.target_height, (s.footprint[1] + s.footprint[3]) / 2]
+                      for s in spec.subjects], 0)
+    corners = np.array([[x, y, z] for s in spec.subjects for x in s.footprint[[0, 2]] for y in (0, s.height)
+                        for z in s.footprint[[1, 3]]])
+    radius = np.linalg.norm(corners - centre, axis=1).max()
+    assert len(spec.views) == 3
+    for v in spec.views:
+        for f, cam in enumerate(v.cameras):
+            eye = -cam.R.T @ cam.t
+            forward = cam.R[2]
+            fov = 2 * np.arctan(min(cam.width / 2 / cam.K[0, 0], cam.height / 2 / cam.K[1, 1]))
+            dist = np.linalg.norm(eye - centre)
+            assert cfg.fit_lambda * radius / np.sin(fov / 2) - 1e-6 <= dist <= cfg.distance_max + 1e-6
+            assert cfg.pitch_deg[0] - 1e-6 <= np.degrees(np.arcsin(-forward[1])) <= cfg.pitch_deg[1] + 1e-6
+            boxes = np.concatenate([objects, [[s.frames[f][0], 0, s.frames[f][1], s.frames[f][2], s.height,
+                                               s.frames[f][3]] for s in spec.subjects]])
+            assert not ((eye >= boxes[:, :3]) & (eye <= boxes[:, 3:])).all(1).any()
+    kinds = {v.kind for v in spec.views}
+    assert kinds <= set(cams.MOTIONS)
+    moving = [v for v in spec.views if v.kind != "static"]
+    for v in moving:  # a moving camera moves (or zooms)
+        a, b = v.cameras[0], v.cameras[-1]
+        assert not (np.allclose(a.K, b.K) and np.allclose(a.R, b.R) and np.allclose(a.t, b.t)), v.kind
+
+
+def test_wall_over_the_lower_half_occludes_half(sm):
+    """A wall from the ground to the body's area-weighted median height, between the camera
+    (at that height) and the subject: half the body's surface is hidden."""
+    from synmitsuba.compose.occlusion import occlusion, surface_samples
+    from synmitsuba.geometry import triangle_areas
+    human = sm.build_subject(sm.sample_subject(np.random.default_rng(4), {"outfit": ["tshirt", "shorts"],
+                                                                          "texture_size": 64}))
+    scene = sm.Scene()
+    human.add_to(scene, instance=100)
+    body = human.pose()[0]
+    tri = body.vertices[body.faces]
+    y, w = tri[:, :, 1].mean(1), triangle_areas(tri)  # an independent area-weighted median height
+    order = np.argsort(y)
+    median = y[order][np.searchsorted(np.cumsum(w[order]), w.sum() / 2)]
+    wall = np.array([[-3, 0, 1.0], [3, 0, 1.0], [3, median, 1.0], [-3, median, 1.0]])
+    scene.add_mesh("wall", wall, np.array([[0, 1, 2], [0, 2, 3]]), instance=7)
+    samples = surface_samples(body.vertices, body.faces, 2000, np.random.default_rng(0))
+    occ = occlusion(scene, np.array([[0.0, median, 6.0]]), samples.on(body.vertices), 100)
+    assert abs(occ[0] - 0.5) < 0.05
+    scene.remove("wall")
+    assert occlusion(scene, np.array([[0.0, median, 6.0]]), samples.on(body.vertices), 100)[0] == 0.0  # own layers
+
+
+def test_spec_is_deterministic_and_round_trips_exactly(sm, spec):
+    again = sm.compose_scene(SMALL, np.random.default_rng(5), seed=5)
+    assert again.to_json() == spec.to_json()
+    back = sm.SceneSpec.from_json(spec.to_json())
+    assert back.to_json() == spec.to_json()
+    for a, b in zip(back.motions, spec.motions):  # rebuilt from recipe and motion seed, bit for bit
+        assert np.array_equal(a.rotations, b.rotations) and np.array_equal(a.root_translation, b.root_translation)
+    for va, vb in zip(back.views, spec.views):
+        assert all(np.array_equal(a.K, b.K) and np.array_equal(a.R, b.R) and np.array_equal(a.t, b.t)
+                   for a, b in zip(va.cameras, vb.cameras))
+    d = json.loads(spec.to_json())
+    assert d["format"] == "synmitsuba.scenespec/1" and len(d["subjects"][0]["frames"]) == spec.n_frames
+
+
+def test_render_sequence_moves_in_place_and_labels_frames(sm, spec):
+    from synmitsuba.engine.build import STATS
+    out = []
+    loads = None
+    for f, view, sample in sm.render_sequence(spec, frames=[0, 5, 10], views=["cam0"], spp=1, seed=2):
+        out.append((f, view, sample))
+        if loads is None:
+            loads = STATS["loads"]
+    assert STATS["loads"] == loads  # no reload after the first frame
+    assert [f for f, _, _ in out] == [0, 5, 10]
+    ids = set(np.unique(out[0][2].instance)) - {0}
+    assert ids & {100, 101} and 1 in ids  # subjects and the ground are seen
+    assert out[1][2].meta["view"] == "cam0" and len(out[1][2].meta["subjects"]) == 2
+    assert not np.array_equal(out[0][2].instance, out[2][2].instance)  # people moved
+    with pytest.raises(ConfigError, match="frames"):
+        next(sm.render_sequence(spec, frames=[spec.n_frames]))
+
+
+def test_ring_cameras_surround_one_subject(sm):
+    cfg = {**SMALL, "subjects": {**SMALL["subjects"], "count": 1},
+           "cameras": {"mode": "ring", "count": 6, "ring_distance": 3.5, "width": 48, "height": 64, "points": 32,
+                       "score_frames": 1}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(2))
+    s = spec.subjects[0]
+    centre = np.array([(s.footprint[0] + s.footprint[2]) / 2, (s.footprint[1] + s.footprint[3]) / 2])
+    eyes = np.array([v.cameras[0].center for v in spec.views])
+    d = eyes[:, [0, 2]] - centre
+    assert np.allclose(np.linalg.norm(eyes - [centre[0], 0.9, centre[1]], axis=1), 3.5)
+    az = np.sort(np.arctan2(d[:, 0], d[:, 1]))
+    assert np.allclose(np.diff(np.concatenate([az, [az[0] + 2 * np.pi]])), 2 * np.pi / 6)
+    assert all(v.kind == "static" and np.allclose(v.cameras[0].K, spec.views[0].cameras[0].K) for v in spec.views)
+
+
+def test_ground_reaches_the_horizon(sm):
+    """A level camera sees ground below the horizon and sky above: no black band between."""
+    from synmitsuba.compose.environments import add_environment, sample_lighting
+    env = load_environment("plaza")
+    rng = np.random.default_rng(0)
+    scene = sm.Scene()
+    add_environment(scene, env, sample_lighting(env, rng), rng)
+    cam = sm.Camera.look_at(eye=(0, 1.7, 0), target=(0, 1.7, -10), fov_y_deg=20, width=64, height=64)
+    s = sm.render(scene, cam, spp=4)
+    lum = s.rgb.mean(-1)
+    assert lum.min() > 0.02, np.argwhere(lum <= 0.02)[:3]
+    assert (s.instance[40:] == 1).all() and (s.instance[:24] == 0).all()  # ground below, sky above
+
+
+def test_configuration_errors_name_the_key(sm, tmp_path):
+    from synmitsuba.compose.composition import load_compose_config
+    rng = np.random.default_rng(0)
+    with pytest.raises(ConfigError, match=r"^cameras\.pitch_deg = \[30, -5\]"):
+        sm.compose_scene({"cameras": {"pitch_deg": [30, -5]}}, rng)
+    with pytest.raises(ConfigError, match=r"subjects\.cuont = 2: unknown key; keys: config, count"):
+        sm.compose_scene({"subjects": {"cuont": 2}}, rng)
+    with pytest.raises(ConfigError, match=r"environments\[0\] = 'moon': no such environment; use one of beach"):
+        sm.compose_scene({"environments": ["moon"]}, rng)
+    bad = tmp_path / "c.yaml"
+    bad.write_text("cameras:\n  count: two\n")
+    with pytest.raises(ConfigError, match=r"cameras\.count = 'two': give an integer"):
+        load_compose_config(str(bad))
+    with pytest.raises(ConfigError, match=r"cameras\.distance_max = 0\.5: no camera passes the bounds"):
+        sm.compose_scene({**SMALL, "subjects": {**SMALL["subjects"], "count": 1}, "cameras": {"distance_max": 0.5}}, rng)
