@@ -38,7 +38,9 @@ llvm: $(STAMP)
 demo: setup
 	$(VENV)/bin/synmitsuba render scenes/demo.yaml --out out/demo
 	$(VENV)/bin/synmitsuba motion preview walk --out out/demo --frames 6 --seed 6
+	$(VENV)/bin/synmitsuba compose configs/compose.yaml --seed 0 --out out/demo/compose --spp 16 --quiet
 	@echo "demo pictures: $(CURDIR)/out/demo/*.png (views with EXR + JSON ground truth, walk_strip.png)"
+	@echo "composed scene: $(CURDIR)/out/demo/compose (scene.json, topdown.png, a render per camera)"
 
 test: setup
 	$(PY) -m pytest -q
@@ -47,6 +49,7 @@ test-all: setup
 	$(PY) -m pytest -q -m ''
 
 bench: setup
+	$(PY) -m pip install -q 'embreex>=4'   # the peer ray caster compose_cost.py compares against
 	$(PY) -m pytest -q -m slow
 	$(PY) bench/import_time.py
 	$(PY) bench/render_passes.py
@@ -54,6 +57,7 @@ bench: setup
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
 	$(PY) bench/subjects_robustness.py 200
+	$(PY) bench/compose_cost.py
 
 clean:
 	rm -rf out .pytest_cache

@@ -233,3 +233,30 @@ def test_configuration_errors_name_the_key(sm, tmp_path):
         load_compose_config(str(bad))
     with pytest.raises(ConfigError, match=r"cameras\.distance_max = 0\.5: no camera passes the bounds"):
         sm.compose_scene({**SMALL, "subjects": {**SMALL["subjects"], "count": 1}, "cameras": {"distance_max": 0.5}}, rng)
+
+
+def test_compose_command_writes_spec_topdown_and_views(sm, tmp_path):
+    import subprocess
+    import sys
+
+    import yaml
+    from PIL import Image
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text(yaml.safe_dump({**SMALL, "subjects": {**SMALL["subjects"], "count": 1},
+                                   "cameras": {**SMALL["cameras"], "count": 2, "motion": ["static"]}}))
+    out = tmp_path / "out"
+    run = subprocess.run([sys.executable, "-m", "synmitsuba", "compose", str(cfg), "--seed", "3", "--out", str(out),
+                          "--spp", "1", "--quiet"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    spec = sm.SceneSpec.from_json((out / "scene.json").read_text())
+    assert len(spec.views) == 2 and len(spec.subjects) == 1
+    top = np.asarray(Image.open(out / "topdown.png").convert("RGB")).astype(int)
+    assert ((top[..., 2] - top[..., 0]) > 100).any()  # blue camera frusta drawn
+    for v in spec.views:
+        sample = sm.read_sample(out / f"{v.name}_f{spec.n_frames // 2:04d}")
+        assert np.allclose(sample.camera.K, v.cameras[spec.n_frames // 2].K)
+        assert (sample.instance == 100).any()
+    cfg.write_text("cameras: {pitch_deg: [40, 10]}\n")
+    bad = subprocess.run([sys.executable, "-m", "synmitsuba", "compose", str(cfg), "--out", str(tmp_path / "b")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "cameras.pitch_deg" in bad.stderr

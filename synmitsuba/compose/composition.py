@@ -11,8 +11,7 @@ import numpy as np
 
 from synmitsuba.body.recipe import SubjectConfig, sample_subject
 from synmitsuba.compose import cameras as cams
-from synmitsuba.compose.environments import (OBJECT_INSTANCE, environment_names, load_environment, object_boxes,
-                                             sample_lighting)
+from synmitsuba.compose.environments import environment_names, load_environment, object_boxes, sample_lighting
 from synmitsuba.compose.occlusion import in_view, occlusion, surface_samples
 from synmitsuba.compose.placement import PlacementConfig, frame_hulls, place_subjects
 from synmitsuba.compose.spec import SceneSpec, SubjectSpec, ViewSpec, clip_motion, resolve_environment
@@ -97,11 +96,11 @@ def _score(scene, placed, subjects, trajs, frames, cfg: cams.CameraConfig, rng) 
     for f in frames:
         for p in placed:
             p.pose_in(scene, f)
+        views = [_camera_at(t, f, cfg) for t in trajs]
         for s, (p, smp) in enumerate(zip(placed, samples)):
             pts = smp.on(p.human.pose(*p.motion.frame(f))[0].vertices)
             occ[:, s] += occlusion(scene, np.stack([t.eye[f] for t in trajs]), pts, p.instance)
-            for c, t in enumerate(trajs):
-                seen[c, s] += in_view(_camera_at(t, f, cfg), pts)
+            seen[:, s] += [in_view(cam, pts) for cam in views]
     return occ / len(frames), seen / len(frames)
 
 

@@ -18,7 +18,7 @@ import functools
 
 import numpy as np
 
-from synmitsuba.engine.settings import DENOISERS, SAMPLERS
+from synmitsuba.engine.settings import SAMPLERS
 from synmitsuba.errors import ConfigError
 GUIDE_SPP = 16
 

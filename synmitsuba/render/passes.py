@@ -19,7 +19,8 @@ import numpy as np
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.render import sensor as sensor_mod
 from synmitsuba.engine.build import build
-from synmitsuba.render.denoise import DENOISERS, choose_sampler, guides, oidn
+from synmitsuba.engine.settings import DENOISERS
+from synmitsuba.render.denoise import choose_sampler, guides, oidn
 from synmitsuba.engine.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
