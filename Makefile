@@ -38,7 +38,7 @@ llvm: $(STAMP)
 demo: setup
 	$(VENV)/bin/synmitsuba render scenes/demo.yaml --out out/demo
 	$(VENV)/bin/synmitsuba motion preview walk --out out/demo --frames 6 --seed 6
-	$(VENV)/bin/synmitsuba compose configs/compose.yaml --seed 0 --out out/demo/compose --spp 16 --quiet
+	$(VENV)/bin/synmitsuba compose configs/compose.yaml --seed 0 --out out/demo/compose --spp 16 --denoise oidn --quiet
 	@echo "demo pictures: $(CURDIR)/out/demo/*.png (views with EXR + JSON ground truth, walk_strip.png)"
 	@echo "composed scene: $(CURDIR)/out/demo/compose (scene.json, topdown.png, a render per camera)"
 

@@ -31,9 +31,23 @@ def _walker(rng, frames=20):
     return [box + p for p in path]
 
 
-def test_placement_never_overlaps_in_100_compositions():
-    """Random walkers in every environment: whole-clip boxes clear of objects and of each other
-    by the margin, and at every frame no two per-frame boxes meet; all inside the area."""
+@pytest.fixture(scope="module")
+def real_clips(sm):
+    """Per-frame ground hulls of real subjects (all layers) over 1-second walk, jog, side-step
+    and wave clips, centred as composition centres them."""
+    from synmitsuba.compose.composition import SubjectsConfig, _subject_clip
+    cfg = SubjectsConfig(seconds=1.0)
+    clips = []
+    for i, kind in enumerate(["walk", "jog", "side_step", "wave"]):
+        human = sm.build_subject(sm.sample_subject(np.random.default_rng(10 + i), {"texture_size": 64}))
+        clips.append(_subject_clip(human, kind, i, cfg, "", i)[1])
+    return clips
+
+
+def test_placement_never_overlaps_in_100_compositions(real_clips):
+    """100 compositions in every environment, people drawn from real clips and random walkers:
+    whole-clip boxes clear of objects and of each other by the margin, at every frame no two
+    per-frame boxes meet, and all inside the area."""
     rng = np.random.default_rng(0)
     envs = [load_environment(n) for n in environment_names()]
     placed_total = 0
@@ -41,9 +55,11 @@ def test_placement_never_overlaps_in_100_compositions():
         env = envs[k % len(envs)]
         objects = object_boxes(env)[:, [0, 2, 3, 5]]
         cfg = PlacementConfig(grid_step=0.2, group_radius=float(rng.uniform(1.5, 4)))
+        people = [real_clips[int(rng.integers(len(real_clips)))] if rng.random() < 0.6 else _walker(rng, 30)
+                  for _ in range(int(rng.integers(2, 7)))]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SynMitsubaWarning)
-            placed = place_subjects([_walker(rng) for _ in range(int(rng.integers(2, 7)))], env.area, objects, cfg, rng)
+            placed = place_subjects(people, env.area, objects, cfg, rng)
         placed_total += len(placed)
         feet = np.array([p.footprint for p in placed])
         grown = objects + np.array([-1, -1, 1, 1]) * cfg.margin
@@ -260,3 +276,21 @@ def test_compose_command_writes_spec_topdown_and_views(sm, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "synmitsuba", "compose", str(cfg), "--out", str(tmp_path / "b")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "cameras.pitch_deg" in bad.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_several_compositions_keep_meshes_apart(sm, seed):
+    """Full compositions of 3-4 people in random environments: at every frame the nearest
+    vertices of any two subjects are apart (mesh to mesh, all layers)."""
+    from scipy.spatial import cKDTree
+    cfg = {"subjects": {"count": [3, 4], "seconds": 1.0, "config": {"texture_size": 64}},
+           "cameras": {"count": 1, "width": 32, "height": 24, "points": 16, "score_frames": 1, "azimuths": 8}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(seed))
+    _, placed = spec.build()
+    for f in range(0, spec.n_frames, 3):
+        trees = [cKDTree(np.concatenate([lay.vertices for lay in p.human.pose(*p.motion.frame(f)) if not lay.is_curves]))
+                 for p in placed]
+        for i in range(len(trees)):
+            for j in range(i):
+                assert trees[i].query(trees[j].data)[0].min() > 0.05, (f, i, j)

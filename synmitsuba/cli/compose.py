@@ -28,7 +28,7 @@ def run(args) -> int:
     print(path)
     print(write_png(os.path.join(args.out, "topdown.png"), draw_topdown(spec)))
     frame = spec.n_frames // 2 if args.frame is None else min(args.frame, spec.n_frames - 1)
-    for f, view, sample in tqdm(render_sequence(spec, frames=[frame], spp=args.spp, seed=args.seed),
+    for f, view, sample in tqdm(render_sequence(spec, frames=[frame], spp=args.spp, seed=args.seed, denoise=args.denoise),
                                 total=len(spec.views), desc="views", unit="view", disable=args.quiet):
         paths = write_sample(sample, os.path.join(args.out, f"{view}_f{f:04d}"))
         print(paths.get("png", paths["exr"]))
@@ -44,6 +44,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=natural_int, default=0, help="composition and render seed")
     p.add_argument("--out", required=True, help="output folder (created)")
     p.add_argument("--spp", type=positive_int, default=16, help="samples per pixel of the renders")
+    p.add_argument("--denoise", choices=("none", "oidn"), default="none", help="denoise the renders' RGB with Intel "
+                   "Open Image Denoise (the raw one is kept as rgb_noisy)")
     p.add_argument("--frame", type=natural_int, help="clip frame rendered (default: the middle one)")
     p.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
