@@ -28,9 +28,11 @@ _FROM = {
     "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry", "compose_scene",
                            "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
     "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
+    "synmitsuba.annotate": ("Annotator",),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}
 _EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function
+_EXPORTS["metrics"] = "synmitsuba.metrics:"
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 __all__ = sorted(_EXPORTS)

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.annotate.records import Annotator
 from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.compose.subjects import add_subjects
@@ -89,12 +90,15 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
     return results
 
 
-def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, **render_args):
+def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, annotate: bool = True,
+                    **render_args):
     """Yield ``(frame, view name, Sample)`` for every frame (default all) and view (default
     all) of a composed scene, frame by frame; subjects move in place (vertices and hair
     curves), so no frame after the first reloads the Mitsuba scene. The sample of frame f
     is rendered with seed ``seed + f``; its meta holds the frame, view, camera motion kind
-    and each subject's occlusion, in-view share and validity in that view."""
+    and each subject's occlusion, in-view share and validity in that view; with ``annotate``
+    its ``subjects`` hold each subject's labels (``synmitsuba.annotate``: keypoints and their
+    visibility, amodal mask, boxes, body parameters in world and camera frames)."""
     if not isinstance(spec, SceneSpec):
         raise ConfigError("spec", type(spec).__name__, "give a SceneSpec (sm.compose_scene or SceneSpec.from_json)")
     names = [v.name for v in spec.views] if views is None else [spec.view(n).name for n in views]
@@ -103,6 +107,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
         if isinstance(f, bool) or not isinstance(f, (int, np.integer)) or not 0 <= f < spec.n_frames:
             raise ConfigError("frames", f, f"give frame indices in [0, {spec.n_frames - 1}]")
     scene, placed = spec.build()
+    annotator = Annotator(placed) if annotate else None
     for f in frames:
         for p in placed:
             p.pose_in(scene, int(f))
@@ -113,4 +118,6 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
                                subjects=[{"instance": s.instance, "occlusion": float(o), "in_view": float(i),
                                           "valid": bool(v)} for s, o, i, v in
                                          zip(spec.subjects, view.occlusion, view.in_view, view.valid)])
+            if annotator is not None:
+                annotator.annotate(sample, scene, int(f), valid=view.valid)
             yield int(f), name, sample

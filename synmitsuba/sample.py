@@ -68,6 +68,7 @@ class Sample:
     coverage: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)      # render settings, written to the sidecar
     timings: dict = field(default_factory=dict)   # seconds per stage; never written (no clock in files)
+    subjects: list = field(default_factory=list)  # per-subject label records (synmitsuba.annotate)
 
     def __getattr__(self, name: str):
         passes = self.__dict__.get("passes", {})

@@ -200,6 +200,8 @@ def test_render_sequence_moves_in_place_and_labels_frames(sm, spec):
     ids = set(np.unique(out[0][2].instance)) - {0}
     assert ids & {100, 101} and 1 in ids  # subjects and the ground are seen
     assert out[1][2].meta["view"] == "cam0" and len(out[1][2].meta["subjects"]) == 2
+    recs = out[1][2].subjects  # labels per subject (synmitsuba.annotate)
+    assert [r["instance"] for r in recs] == [100, 101] and recs[0]["keypoints2d"].shape == (23, 2)
     assert not np.array_equal(out[0][2].instance, out[2][2].instance)  # people moved
     with pytest.raises(ConfigError, match="frames"):
         next(sm.render_sequence(spec, frames=[spec.n_frames]))

@@ -1,5 +1,5 @@
-"""Ray casts on the loaded Mitsuba scene (``scene.ray_intersect``, Embree-class BVH in
-Mitsuba's own kernels): what stands first between points and a viewer."""
+"""Ray casts on the loaded Mitsuba scene (``ray_intersect_preliminary``: Mitsuba's own BVH
+traversal, no shading): what stands first along a ray or between points and a viewer."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,24 +9,32 @@ from synmitsuba.engine.variant import current_variant
 from synmitsuba.scene.scene import Scene
 
 
-def first_hits(scene: Scene, origins, targets, shrink: float = 1e-4) -> np.ndarray:
-    """Instance id of the first surface each segment ``origins[i] -> targets[i]`` (N, 3)
-    meets before reaching ``targets[i]``; 0 where nothing is in between. ``shrink`` (metres)
-    stops the segment short of its target so the target's own surface is not counted."""
+def cast(scene: Scene, origins, directions, maxt=None) -> tuple[np.ndarray, np.ndarray]:
+    """Instance id (0: nothing) and distance (inf: nothing) of the first surface each ray
+    ``origins[i] + s * directions[i]`` (N, 3; unit directions) meets for s < ``maxt[i]``."""
     import drjit as dr
     import mitsuba as mi
     current_variant()
     built = build(scene)
-    o = np.ascontiguousarray(np.broadcast_to(np.asarray(origins, np.float64), np.shape(targets)), np.float32)
-    t = np.asarray(targets, np.float64)
-    d = t - o
-    length = np.linalg.norm(d, axis=-1)
-    d = d / np.maximum(length, 1e-12)[:, None]
-    ray = mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k]) for k in range(3))),
+    d = np.asarray(directions, np.float64)
+    o = np.broadcast_to(np.asarray(origins, np.float64), d.shape)
+    ray = mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k].astype(np.float32)) for k in range(3))),
                    mi.Vector3f(*(mi.Float(d[:, k].astype(np.float32)) for k in range(3))))
-    ray.maxt = mi.Float(np.maximum(length - shrink, 0.0).astype(np.float32))
+    if maxt is not None:
+        ray.maxt = mi.Float(np.broadcast_to(np.asarray(maxt, np.float64), len(d)).astype(np.float32))
     si = built.mi_scene.ray_intersect_preliminary(ray, coherent=False)
     hit = si.is_valid()
-    reg = dr.reinterpret_array(mi.UInt32, si.shape)
-    ids = built.lookup("instance", reg, hit)
-    return np.asarray(ids.numpy(), np.int64)
+    ids = built.lookup("instance", dr.reinterpret_array(mi.UInt32, si.shape), hit)
+    t = dr.select(hit, si.t, dr.inf)
+    return np.asarray(ids.numpy(), np.int64), np.asarray(t.numpy(), np.float64)
+
+
+def first_hits(scene: Scene, origins, targets, shrink: float = 1e-4) -> np.ndarray:
+    """Instance id of the first surface each segment ``origins[i] -> targets[i]`` (N, 3)
+    meets before reaching ``targets[i]``; 0 where nothing is in between. ``shrink`` (metres)
+    stops the segment short of its target so the target's own surface is not counted."""
+    t = np.asarray(targets, np.float64)
+    d = t - np.broadcast_to(np.asarray(origins, np.float64), t.shape)
+    length = np.linalg.norm(d, axis=-1)
+    ids, _ = cast(scene, origins, d / np.maximum(length, 1e-12)[:, None], np.maximum(length - shrink, 0.0))
+    return ids

@@ -2,7 +2,8 @@
 
 Channels come from the pass registry (``synmitsuba.sample.PASSES``): R G B A, depth.Z,
 normal.X/Y/Z, position.X/Y/Z, uv.U/V (float32); mask, uv.valid, instance, layer (uint32); plus
-coverage.<id> (float32: soft mask of each instance). The camera (OpenCV K, R, t, size) and render
+coverage.<id> (float32: soft mask of each instance) and amodal.<id> (uint32: each subject's
+amodal mask, with its label record in the JSON's ``subjects``). The camera (OpenCV K, R, t, size) and render
 settings are in the EXR header (``synmitsuba`` attribute, JSON) and in ``<stem>.json``. Files are written under a
 temporary name and renamed, so a crash never leaves a half-written sample that looks complete.
 """
@@ -34,7 +35,37 @@ def _channels(sample: Sample) -> dict[str, np.ndarray]:
             ch[cname] = np.ascontiguousarray(comp, dtype=_EXR_DTYPE[spec.exr_type])
     for inst, frac in sample.coverage.items():  # float32: k / n is not exact in half precision for n = 9
         ch[f"coverage.{inst}"] = np.ascontiguousarray(frac, dtype=np.float32)
+    for rec in sample.subjects:
+        ch[f"amodal.{rec['instance']}"] = np.ascontiguousarray(rec["amodal_mask"], dtype=np.uint32)
     return ch
+
+
+def _plain(value):
+    """JSON-ready copy of a label record's value (arrays as lists)."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+ARRAY_KEYS = ("keypoints3d_world", "keypoints3d_cam", "keypoints2d", "visibility", "visible_fraction_kp",
+              "joints3d_world", "root_world")
+
+
+def _record_back(rec: dict, ch: dict) -> dict:
+    out = dict(rec)
+    for k in ARRAY_KEYS:
+        out[k] = np.asarray(rec[k], np.uint8 if k == "visibility" else np.float64)
+    for k in ("body_params_world", "body_params_cam"):
+        out[k] = {**rec[k], "rotations": np.asarray(rec[k]["rotations"]),
+                  "root_translation": np.asarray(rec[k]["root_translation"])}
+    out["amodal_mask"] = ch[f"amodal.{rec['instance']}"].astype(bool)
+    return out
 
 
 def _passes(ch: dict) -> dict[str, np.ndarray]:
@@ -51,7 +82,8 @@ def _passes(ch: dict) -> dict[str, np.ndarray]:
 def _sidecar(sample: Sample) -> dict:
     return {"format": "synmitsuba-sample", "format_version": FORMAT_VERSION,
             "camera": sample.camera.to_dict(), "instances": sample.instance_ids(),
-            "width": sample.camera.width, "height": sample.camera.height, "meta": sample.meta}
+            "width": sample.camera.width, "height": sample.camera.height, "meta": sample.meta,
+            "subjects": [_plain({k: v for k, v in r.items() if k != "amodal_mask"}) for r in sample.subjects]}
 
 
 def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, str]:
@@ -84,4 +116,4 @@ def read_sample(stem: str) -> Sample:
         side = json.loads(f.header()["synmitsuba"])
     cov = {int(k.split(".", 1)[1]): v.astype(np.float32) for k, v in ch.items() if k.startswith("coverage.")}
     return Sample(camera=Camera.from_dict(side["camera"]), passes=_passes(ch), coverage=dict(sorted(cov.items())),
-                  meta=side.get("meta", {}))
+                  meta=side.get("meta", {}), subjects=[_record_back(r, ch) for r in side.get("subjects", [])])

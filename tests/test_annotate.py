@@ -1,0 +1,104 @@
+"""Per-subject labels against independent computations: posing with camera-frame parameters,
+visibility classes in hand-built scenes, amodal masks against a render of the subject alone,
+boxes, projection by the pinhole formula, and the sample files."""
+import json
+
+import numpy as np
+import pytest
+
+from synmitsuba.compose.subjects import PlacedSubject
+
+
+@pytest.fixture(scope="module")
+def walker(sm):
+    human = sm.build_subject(sm.sample_subject(np.random.default_rng(4), {"outfit": ["tshirt", "shorts"],
+                                                                          "hair_style": "short", "texture_size": 64}))
+    clip = sm.retarget(sm.procedural_motion("walk", np.random.default_rng(0), seconds=0.5), human.skeleton)
+    return PlacedSubject(human, clip, 0, 100, "subject0")
+
+
+def _scene(sm, walker, frame=3):
+    scene = sm.Scene()
+    scene.set_environment(sm.Constant(1.0))
+    walker.pose_in(scene, frame)
+    return scene
+
+
+def test_camera_frame_body_parameters_reproduce_camera_vertices(sm, walker):
+    from scipy.spatial.transform import Rotation
+
+    from synmitsuba.annotate import body_params_in_camera
+    cam = sm.Camera.look_at(eye=(2.0, 1.5, 3.0), target=(0, 0.9, 0), width=64, height=64)
+    rot, root = walker.motion.frame(3)
+    world = walker.human.pose(rot, root)
+    rot_c, root_c = body_params_in_camera(walker.human.skeleton, rot, root, cam)
+    rot_c = Rotation.from_rotvec(Rotation.from_matrix(rot_c).as_rotvec()).as_matrix()  # as stored: axis-angle
+    camera_frame = walker.human.pose(rot_c, root_c)
+    for a, b in zip(world, camera_frame):
+        if not a.is_curves:
+            assert np.abs(a.vertices @ cam.R.T + cam.t - b.vertices).max() < 1e-5
+
+
+def test_visibility_classes_in_hand_built_scenes(sm, walker):
+    from synmitsuba.annotate import keypoint_visibility
+    rot, root = walker.motion.frame(3)
+    kp = walker.human.keypoints(rot, root)
+    body = walker.human.pose(rot, root)[0].vertices
+    c = kp[:, [0, 2]].mean(0)
+    front = sm.Camera.look_at(eye=(c[0], 1.0, c[1] + 4.0), target=(c[0], 0.9, c[1]), fov_y_deg=40, width=96, height=128)
+    scene = _scene(sm, walker)
+    vis, frac = keypoint_visibility(scene, front, kp, body, 100, {100, 200})
+    face = [0, 1, 2]  # nose, eyes (COCO order)
+    assert (vis[face] == 1).all() and (frac[face] > 0.5).all()
+    back = sm.Camera.look_at(eye=(c[0], 1.6, c[1] - 4.0), target=(c[0], 1.6, c[1]), fov_y_deg=40, width=96, height=128)
+    assert (keypoint_visibility(scene, back, kp, body, 100, {100})[0][face] == 2).all()  # behind the head
+    wall = np.array([[-3, 0, 0.6], [3, 0, 0.6], [3, 0.7, 0.6], [-3, 0.7, 0.6]]) + [c[0], 0, c[1]]
+    scene.add_mesh("wall", wall, np.array([[0, 1, 2], [0, 2, 3]]), instance=7)
+    head = np.array([[-0.3, 1.3, 0.4], [0.3, 1.3, 0.4], [0.3, 2.0, 0.4], [-0.3, 2.0, 0.4]]) + [c[0], 0, c[1]]
+    scene.add_mesh("other", head, np.array([[0, 1, 2], [0, 2, 3]]), instance=200)
+    vis, _ = keypoint_visibility(scene, front, kp, body, 100, {100, 200})
+    ankles = [15, 16]
+    assert (vis[ankles] == 4).all() and (vis[face] == 3).all()
+    up = sm.Camera.look_at(eye=(c[0], 1.0, c[1] + 4.0), target=(c[0], 3.0, c[1]), fov_y_deg=20, width=32, height=32)
+    assert (keypoint_visibility(scene, up, kp, body, 100, {100, 200})[0][ankles] == 0).all()  # out of the image
+
+
+def test_amodal_mask_boxes_and_projection(sm, walker):
+    from synmitsuba.annotate import Annotator
+    rot, root = walker.motion.frame(3)
+    c = walker.human.keypoints(rot, root)[:, [0, 2]].mean(0)
+    cam = sm.Camera.look_at(eye=(c[0] + 1.0, 1.0, c[1] + 4.0), target=(c[0], 0.9, c[1]), fov_y_deg=40, width=80,
+                            height=96)
+    scene = _scene(sm, walker)
+    wall = np.array([[-3, 0, 0.6], [3, 0, 0.6], [3, 0.8, 0.6], [-3, 0.8, 0.6]]) + [c[0], 0, c[1]]
+    scene.add_mesh("wall", wall, np.array([[0, 1, 2], [0, 2, 3]]), instance=7)
+    sample = sm.render(scene, cam, spp=1)
+    rec = Annotator([walker]).annotate(sample, scene, 3)[0]
+    alone = sm.render(_scene(sm, walker), cam, spp=1)  # the subject alone, rendered on its own
+    assert np.array_equal(rec["amodal_mask"], alone.instance == 100)
+    visible = sample.instance == 100
+    assert (visible <= rec["amodal_mask"]).all() and 0.3 < rec["visible_fraction"] < 0.9
+    assert rec["visible_fraction"] == pytest.approx(visible.sum() / rec["amodal_mask"].sum())
+    ys, xs = np.where(visible)
+    assert rec["bbox_visible"] == [xs.min(), ys.min(), xs.max() + 1, ys.max() + 1]
+    K, X = cam.K, rec["keypoints3d_cam"]
+    assert np.allclose(rec["keypoints2d"][:, 0], K[0, 0] * X[:, 0] / X[:, 2] + K[0, 2])  # pinhole, by hand
+    assert np.allclose(rec["keypoints2d"][:, 1], K[1, 1] * X[:, 1] / X[:, 2] + K[1, 2])
+    assert rec["valid"] and rec["scale"] == pytest.approx(1.2 * max(rec["bbox_keypoints"][2] - rec["bbox_keypoints"][0],
+                                                                    rec["bbox_keypoints"][3] - rec["bbox_keypoints"][1]) / 200)
+
+
+def test_subject_records_survive_the_sample_files(sm, walker, tmp_path):
+    from synmitsuba.annotate import Annotator
+    scene = _scene(sm, walker)
+    cam = sm.Camera.look_at(eye=(0.0, 1.0, 4.0), target=(0, 0.9, 0), width=40, height=48)
+    sample = sm.render(scene, cam, spp=1)
+    Annotator([walker]).annotate(sample, scene, 3)
+    sm.write_sample(sample, tmp_path / "s")
+    back = sm.read_sample(tmp_path / "s")
+    a, b = sample.subjects[0], back.subjects[0]
+    assert np.array_equal(a["amodal_mask"], b["amodal_mask"]) and np.array_equal(a["visibility"], b["visibility"])
+    assert np.allclose(a["keypoints2d"], b["keypoints2d"], rtol=0, atol=0)
+    assert np.array_equal(a["body_params_cam"]["rotations"], b["body_params_cam"]["rotations"])
+    side = json.loads((tmp_path / "s.json").read_text())
+    assert side["subjects"][0]["instance"] == 100 and "amodal_mask" not in side["subjects"][0]
