@@ -274,6 +274,11 @@ def test_compose_command_writes_spec_topdown_and_views(sm, tmp_path):
         sample = sm.read_sample(out / f"{v.name}_f{spec.n_frames // 2:04d}")
         assert np.allclose(sample.camera.K, v.cameras[spec.n_frames // 2].K)
         assert (sample.instance == 100).any()
+    stem = out / f"{spec.views[0].name}_f{spec.n_frames // 2:04d}"
+    show = subprocess.run([sys.executable, "-m", "synmitsuba", "show", str(stem)], capture_output=True, text=True)
+    assert show.returncode == 0, show.stderr
+    panel = np.asarray(Image.open(f"{stem}_panel.png").convert("RGB"))
+    assert panel.shape[0] > 2 * 48 and panel.shape[1] > 3 * 64 and "subject 100: visible fraction" in show.stdout
     cfg.write_text("cameras: {pitch_deg: [40, 10]}\n")
     bad = subprocess.run([sys.executable, "-m", "synmitsuba", "compose", str(cfg), "--out", str(tmp_path / "b")],
                          capture_output=True, text=True)
