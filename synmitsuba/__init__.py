@@ -19,7 +19,7 @@ _FROM = {
     "synmitsuba.sample": ("Sample", "PASSES", "register_pass"),
     "synmitsuba.engine.variant": ("set_variant", "current_variant"),
     "synmitsuba.io": ("write_sample", "read_sample", "SampleDataset", "list_samples", "to_srgb8", "write_png",
-                      "contact_sheet"),
+                      "contact_sheet", "export_coco", "export_humandata", "sample_panel"),
     "synmitsuba.body": ("SubjectRecipe", "sample_subject", "build_subject", "LayeredHuman", "PosedLayer", "Skeleton",
                         "forward_kinematics", "anny_uv_masks", "GARMENT_KINDS", "ACCESSORY_KINDS"),
     "synmitsuba.motion": ("Motion", "load_bvh", "parse_bvh", "BVHError", "load_amass", "smplx_skeleton",

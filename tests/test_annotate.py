@@ -102,3 +102,49 @@ def test_subject_records_survive_the_sample_files(sm, walker, tmp_path):
     assert np.array_equal(a["body_params_cam"]["rotations"], b["body_params_cam"]["rotations"])
     side = json.loads((tmp_path / "s.json").read_text())
     assert side["subjects"][0]["instance"] == 100 and "amodal_mask" not in side["subjects"][0]
+
+
+def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path):
+    """Two people (one partly behind the other) in two views, exported; pycocotools decodes
+    the masks to the instance pass and, fed the ground truth as predictions, scores AP = 1."""
+    import contextlib
+    import io
+
+    from pycocotools import mask as mask_util
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    from synmitsuba.annotate import Annotator
+    other = PlacedSubject(walker.human, walker.motion.moved(0.0, [0.5, 0.0, -1.0]), 0, 101, "subject1")
+    scene = _scene(sm, walker)
+    other.pose_in(scene, 3)
+    data = tmp_path / "data"
+    for k, eye in enumerate([(0.3, 1.2, 4.0), (-2.5, 1.4, 3.0)]):
+        cam = sm.Camera.look_at(eye=eye, target=(0.2, 0.9, -0.4), fov_y_deg=45, width=96, height=80)
+        sample = sm.render(scene, cam, spp=1)
+        Annotator([walker, other]).annotate(sample, scene, 3)
+        sm.write_sample(sample, data / f"view{k}")
+    out = tmp_path / "coco.json"
+    assert sm.export_coco(str(data), str(out)) == {"images": 2, "annotations": 4}
+    with contextlib.redirect_stdout(io.StringIO()):
+        gt = COCO(str(out))
+        for ann in gt.dataset["annotations"]:
+            sample = sm.read_sample(data / f"view{ann['image_id'] - 1}")
+            assert np.array_equal(mask_util.decode(gt.annToRLE(ann)).astype(bool), sample.instance == ann["instance"])
+        preds = [{**a, "score": 1.0} for a in gt.dataset["annotations"]]
+        for iou in ("keypoints", "segm", "bbox"):
+            ev = COCOeval(gt, gt.loadRes(preds), iou)
+            ev.evaluate()
+            ev.accumulate()
+            ev.summarize()
+            assert ev.stats[0] == pytest.approx(1.0), iou
+    assert sm.export_humandata(str(data), str(tmp_path / "hd.npz")) == {"subjects": 4}
+    hd = np.load(tmp_path / "hd.npz")
+    X, K = hd["keypoints3d"][..., :3], hd["cam_param.K"]
+    proj = np.einsum("nij,nkj->nki", K, X)
+    assert np.allclose(proj[..., :2] / proj[..., 2:], hd["keypoints2d"][..., :2])  # K projects the camera points
+    R, T = hd["cam_param.R"], hd["cam_param.T"]
+    root_cam = np.einsum("nij,nj->ni", R, hd["anny.root_world"]) + T  # the world root trajectory, in the camera
+    assert hd["anny.rotations"].shape[1:] == (len(walker.human.skeleton), 3)
+    assert np.allclose(root_cam, walker.human.skeleton.rest_positions[0] + hd["anny.root_translation"])
+    assert list(hd["instance"]) == [100, 101, 100, 101] and hd["image_path"][0].endswith("view0.png")
