@@ -58,7 +58,7 @@ bench: setup
 	$(PY) bench/subject_pose.py
 	$(PY) bench/subjects_robustness.py 200
 	$(PY) bench/compose_cost.py
-	$(PY) bench/annotate_cost.py --views 2
+	$(PY) bench/annotate_cost.py --views 4 --frames 3
 
 clean:
 	rm -rf out .pytest_cache

@@ -1,5 +1,5 @@
 """Annotation cost per frame (issue 8): subject labels (keypoints with visibility, amodal masks,
-boxes, body parameters) against the render of the same view in the same run, as a share
+boxes, body parameters) and exact forward + backward flow against the render of the same view in the same run, as a share
 (goal <= 15 %). A composed scene of 4 subjects; prints JSON.
 
     python bench/annotate_cost.py [--res 512] [--spp 16] [--views 4] [--frames 2]
@@ -22,11 +22,13 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     import synmitsuba as sm
     from synmitsuba.annotate import Annotator
+    from synmitsuba.pipeline import _add_flow, _GeometryCache, _Neighbours
     cfg = {"environments": ["plaza"], "subjects": {"count": 4, "motions": ["walk", "idle", "wave", "jog"]},
            "cameras": {"count": args.views, "width": args.res, "height": args.res, "points": 64}}
     spec = sm.compose_scene(cfg, np.random.default_rng(3), seed=3)
     scene, placed = spec.build()
     annotator = Annotator(placed)
+    geometry, neighbours = _GeometryCache(placed), _Neighbours(scene, placed)
     render_s, label_s = [], []
     for f in range(args.frames):
         for p in placed:
@@ -37,6 +39,7 @@ def main(argv=None) -> int:
             render_s.append(time.perf_counter() - t)
             t = time.perf_counter()
             annotator.annotate(sample, scene, f, valid=v.valid)
+            _add_flow(sample, scene, placed, v, f, spec.n_frames, geometry, neighbours)
             label_s.append(time.perf_counter() - t)
     steady = slice(len(spec.views), None)  # the first frame's views compile kernels
     print(json.dumps({"subjects": len(placed), "views": len(spec.views), "resolution": args.res, "spp": args.spp,

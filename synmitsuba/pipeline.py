@@ -18,10 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.annotate.flow import exact_flow, geometry_copy, subjects_geometry
 from synmitsuba.annotate.records import Annotator
 from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.compose.subjects import add_subjects
+from synmitsuba.engine.build import build
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.exr import write_sample
 from synmitsuba.render.passes import render
@@ -108,6 +110,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
             raise ConfigError("frames", f, f"give frame indices in [0, {spec.n_frames - 1}]")
     scene, placed = spec.build()
     annotator = Annotator(placed) if annotate else None
+    geometry, neighbours = _GeometryCache(placed), _Neighbours(scene, placed)
     for f in frames:
         for p in placed:
             p.pose_in(scene, int(f))
@@ -120,4 +123,47 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
                                          zip(spec.subjects, view.occlusion, view.in_view, view.valid)])
             if annotator is not None:
                 annotator.annotate(sample, scene, int(f), valid=view.valid)
+                _add_flow(sample, scene, placed, view, int(f), spec.n_frames, geometry, neighbours)
             yield int(f), name, sample
+
+
+class _GeometryCache:
+    """Subjects' geometry by frame, kept for the three frames flow needs at a time."""
+
+    def __init__(self, placed):
+        self.placed, self.frames = placed, {}
+
+    def __call__(self, frame: int):
+        if frame not in self.frames:
+            if len(self.frames) > 3:  # drop the frame farthest from this one
+                self.frames.pop(max(self.frames, key=lambda k: abs(k - frame)))
+            self.frames[frame] = subjects_geometry(self.placed, frame)
+        return self.frames[frame]
+
+
+class _Neighbours:
+    """Plain copies of the scene held at frames f - 1 and f + 1 for flow's visibility tests:
+    each moves once per frame, whatever the number of views."""
+
+    def __init__(self, scene, placed):
+        self.placed, self.scene, self.copies, self.at = placed, scene, {}, {}
+
+    def __call__(self, g: int, f: int):
+        key = "next" if g > f else "previous"
+        if not self.copies:  # both at once: every load happens on the first frame
+            self.copies = {k: geometry_copy(self.scene) for k in ("next", "previous")}
+            for copy in self.copies.values():
+                build(copy)
+        if self.at.get(key) != g:
+            for p in self.placed:
+                p.pose_in(self.copies[key], g)
+            self.at[key] = g
+        return self.copies[key]
+
+
+def _add_flow(sample, scene, placed, view, f: int, n_frames: int, geometry, neighbours) -> None:
+    """Exact forward (to f + 1) and backward (to f - 1) flow where those frames exist."""
+    for name, g in (("flow_fwd", f + 1), ("flow_bwd", f - 1)):
+        if 0 <= g < n_frames:
+            flow, flags = exact_flow(scene, view.cameras[f], view.cameras[g], geometry(f), geometry(g), neighbours(g, f))
+            sample.passes[name], sample.passes[f"{name}_flag"] = flow, flags

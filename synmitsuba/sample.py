@@ -55,6 +55,12 @@ register_pass("uv", ("uv.U", "uv.V"), "float32", doc="texture coordinates (v up)
 register_pass("uv_valid", ("uv.valid",), "bool", "uint32", doc="1 where the hit shape has texture coordinates")
 register_pass("instance", ("instance",), "int32", "uint32", doc="instance id; 0 = background")
 register_pass("layer", ("layer",), "uint8", "uint32", doc="semantic layer id (synmitsuba.Layer); 0 = background")
+register_pass("flow_fwd", ("flow_fwd.X", "flow_fwd.Y"), "float32",
+              doc="pixels each pixel's surface point moves to the next frame (exact; render_sequence)")
+register_pass("flow_bwd", ("flow_bwd.X", "flow_bwd.Y"), "float32", doc="the same to the previous frame")
+register_pass("flow_fwd_flag", ("flow_fwd.flag",), "uint8", "uint32",
+              doc="0 seen at the next frame, 1 hidden there, 2 outside its image, 3 background")
+register_pass("flow_bwd_flag", ("flow_bwd.flag",), "uint8", "uint32", doc="the same for the previous frame")
 
 
 @dataclass

@@ -191,12 +191,16 @@ def test_render_sequence_moves_in_place_and_labels_frames(sm, spec):
     from synmitsuba.engine.build import STATS
     out = []
     loads = None
-    for f, view, sample in sm.render_sequence(spec, frames=[0, 5, 10], views=["cam0"], spp=1, seed=2):
+    last = spec.n_frames - 1
+    for f, view, sample in sm.render_sequence(spec, frames=[0, 5, last], views=["cam0"], spp=1, seed=2):
         out.append((f, view, sample))
         if loads is None:
             loads = STATS["loads"]
     assert STATS["loads"] == loads  # no reload after the first frame
-    assert [f for f, _, _ in out] == [0, 5, 10]
+    assert [f for f, _, _ in out] == [0, 5, last]
+    first, mid, end = (o[2].passes for o in out)  # exact flow where the neighbouring frame exists
+    assert "flow_bwd" not in first and "flow_fwd" not in end and mid["flow_fwd"].shape == (48, 64, 2)
+    assert (mid["flow_fwd_flag"][mid["instance"] == 0] == 3).all() and (mid["flow_fwd_flag"] == 0).mean() > 0.5
     ids = set(np.unique(out[0][2].instance)) - {0}
     assert ids & {100, 101} and 1 in ids  # subjects and the ground are seen
     assert out[1][2].meta["view"] == "cam0" and len(out[1][2].meta["subjects"]) == 2

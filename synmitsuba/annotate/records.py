@@ -51,6 +51,20 @@ class Annotator:
     def __init__(self, subjects: list):
         self.subjects = subjects
         self._alone = [Scene() for _ in subjects]
+        self._frame: int | None = None
+        self._posed: list = []  # per subject at self._frame: (keypoints, body vertices, joints)
+
+    def _pose(self, frame: int) -> None:
+        """Pose every subject's own scene and its labels' geometry once per frame (not per view)."""
+        if frame == self._frame:
+            return
+        self._posed = []
+        for i, p in enumerate(self.subjects):
+            rot, root = p.motion.frame(frame % p.motion.n_frames)
+            p.human.add_to(self._alone[i], rot, root, instance=p.instance, prefix=p.prefix)
+            body = next(m for n, m in self._alone[i].meshes.items() if n == f"{p.prefix}_body").vertices
+            self._posed.append((p.human.keypoints(rot, root), body, _joints(p.human.skeleton, rot, root)))
+        self._frame = frame
 
     def annotate(self, sample, scene: Scene, frame: int, valid=None) -> list[dict]:
         """Fill and return ``sample.subjects`` for ``scene`` posed at ``frame``. A record is
@@ -59,27 +73,44 @@ class Annotator:
         cam = sample.camera
         rays = cam.pixel_rays().reshape(-1, 3)
         instances = {p.instance for p in self.subjects}
+        self._pose(int(frame))
         records = []
         for i, p in enumerate(self.subjects):
             rot, root = p.motion.frame(int(frame) % p.motion.n_frames)
-            p.human.add_to(self._alone[i], rot, root, instance=p.instance, prefix=p.prefix)
-            amodal = (cast(self._alone[i], cam.center, rays)[0] == p.instance).reshape(cam.height, cam.width)
-            rec = self._record(p, rot, root, cam, scene, instances, amodal, sample.passes["instance"] == p.instance)
+            amodal = self._amodal(i, p.instance, cam, rays)
+            rec = self._record(p, rot, root, cam, scene, instances, amodal, sample.passes["instance"] == p.instance,
+                               *self._posed[i])
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
             records.append(rec)
         sample.subjects = records
         return records
 
-    def _record(self, p, rot, root, cam: Camera, scene, instances, amodal, visible) -> dict:
-        kp = p.human.keypoints(rot, root)
-        body = p.human.pose(rot, root)[0].vertices
+    def _amodal(self, i: int, instance: int, cam: Camera, rays: np.ndarray) -> np.ndarray:
+        """The subject alone through pixel-centre rays, cast only inside the image box its
+        geometry projects to (the whole image when part of it is behind the camera)."""
+        alone = self._alone[i]
+        pts = np.concatenate([m.vertices for m in alone.meshes.values()] +
+                             [c.points.reshape(-1, 3) for c in alone.curves.values()])
+        uv, z = cam.project(pts)
+        mask = np.zeros((cam.height, cam.width), bool)
+        x0, y0, x1, y1 = 0, 0, cam.width, cam.height
+        if (z > 1e-6).all():
+            lo, hi = np.floor(uv.min(0)).astype(int) - 2, np.ceil(uv.max(0)).astype(int) + 2
+            x0, y0 = max(lo[0], 0), max(lo[1], 0)
+            x1, y1 = min(hi[0], cam.width), min(hi[1], cam.height)
+            if x0 >= x1 or y0 >= y1:
+                return mask
+        grid = rays.reshape(cam.height, cam.width, 3)[y0:y1, x0:x1].reshape(-1, 3)
+        mask[y0:y1, x0:x1] = (cast(alone, cam.center, grid)[0] == instance).reshape(y1 - y0, x1 - x0)
+        return mask
+
+    def _record(self, p, rot, root, cam: Camera, scene, instances, amodal, visible, kp, body, joints) -> dict:
         vis, frac = keypoint_visibility(scene, cam, kp, body, p.instance, instances)
         kp2d, _ = cam.project(kp)
         box, centre, scale = keypoint_box(kp2d, vis)
         rot_c, root_c = body_params_in_camera(p.human.skeleton, rot, root, cam)
         phen = dict(p.human.recipe.phenotypes)
         n_amodal = int(amodal.sum())
-        joints = _joints(p.human.skeleton, rot, root)
         return {"instance": int(p.instance), "keypoints3d_world": kp, "keypoints3d_cam": kp @ cam.R.T + cam.t,
                 "keypoints2d": kp2d, "visibility": vis, "visible_fraction_kp": frac,
                 "joints3d_world": joints,

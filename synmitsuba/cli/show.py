@@ -1,7 +1,6 @@
 """``synmitsuba show SAMPLE [--out PNG]``: a panel of a written sample's labels."""
 from __future__ import annotations
 
-import os
 
 from synmitsuba.cli.args import output_file
 

@@ -124,8 +124,9 @@ class BuiltScene:
     mi_scene: object
     params: object
     versions: tuple[int, int]
-    tables: dict               # name -> numpy array indexed by registry id
+    tables: dict               # name -> numpy array indexed by registry id ("shape": 1 + index in names)
     instance_ids: list         # instance ids > 0 present in the scene
+    names: list = field(default_factory=list)  # shape names (meshes, then curves), as the "shape" table counts them
     _dr_tables: dict = field(default_factory=dict)
 
     def lookup(self, name: str, reg, active):
@@ -156,10 +157,12 @@ def _tables(mi_scene, scene: Scene) -> tuple[dict, list]:
               **{n: (c.instance, c.layer, False) for n, c in scene.curves.items()}}
     reg = dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr()).numpy() if mi_scene.shapes() else np.zeros(0, np.uint32)
     size = int(reg.max()) + 1 if len(reg) else 1
-    tables = {k: np.zeros(size, np.uint32) for k in ("instance", "layer", "has_uv")}
+    tables = {k: np.zeros(size, np.uint32) for k in ("instance", "layer", "has_uv", "shape")}
+    names = list(shapes)
     for r, shape in zip(reg, mi_scene.shapes()):
         inst, lay, has_uv = shapes.get(shape.id(), (0, 0, False))  # emitters' rectangles get (0, 0)
         tables["instance"][r], tables["layer"][r], tables["has_uv"][r] = inst, lay, has_uv
+        tables["shape"][r] = names.index(shape.id()) + 1 if shape.id() in shapes else 0  # 1 + index in names
     return tables, sorted({v[0] for v in shapes.values() if v[0] > 0})
 
 
@@ -184,7 +187,8 @@ def build(scene: Scene) -> BuiltScene:
         d[f"light_{i}"] = _light(light)
     mi_scene = mi.load_dict(d)
     tables, ids = _tables(mi_scene, scene)
-    built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids)
+    built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids,
+                       names=[*scene.meshes, *scene.curves])
     scene._built = built
     STATS["loads"] += 1
     return built

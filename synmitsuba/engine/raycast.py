@@ -38,3 +38,27 @@ def first_hits(scene: Scene, origins, targets, shrink: float = 1e-4) -> np.ndarr
     length = np.linalg.norm(d, axis=-1)
     ids, _ = cast(scene, origins, d / np.maximum(length, 1e-12)[:, None], np.maximum(length - shrink, 0.0))
     return ids
+
+
+def surface_hits(scene: Scene, origins, directions) -> dict:
+    """The first surface along each ray (N, 3; unit directions): ``instance``, ``shape`` (an
+    index into ``names``, -1 where nothing is hit), ``names`` (the scene's shape names), ``prim`` (triangle or curve segment index), ``u``, ``v``
+    (Mitsuba's ``prim_uv``: barycentric weights of vertices 1 and 2 on a triangle) and ``t``
+    (inf where nothing is hit)."""
+    import drjit as dr
+    import mitsuba as mi
+    current_variant()
+    built = build(scene)
+    d = np.asarray(directions, np.float64)
+    o = np.broadcast_to(np.asarray(origins, np.float64), d.shape)
+    ray = mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k].astype(np.float32)) for k in range(3))),
+                   mi.Vector3f(*(mi.Float(d[:, k].astype(np.float32)) for k in range(3))))
+    si = built.mi_scene.ray_intersect_preliminary(ray, coherent=True)
+    hit = si.is_valid()
+    reg = dr.reinterpret_array(mi.UInt32, si.shape)
+    shape = built.lookup("shape", reg, hit).numpy().astype(np.int64) - 1
+    return {"instance": built.lookup("instance", reg, hit).numpy().astype(np.int64), "shape": shape,
+            "names": list(built.names),
+            "prim": np.asarray(dr.select(hit, si.prim_index, 0).numpy(), np.int64),
+            "u": np.asarray(si.prim_uv.x.numpy(), np.float64), "v": np.asarray(si.prim_uv.y.numpy(), np.float64),
+            "t": np.asarray(dr.select(hit, si.t, dr.inf).numpy(), np.float64)}

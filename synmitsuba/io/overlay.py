@@ -1,6 +1,6 @@
 """A panel of a sample's labels, what a user opens first: RGB with keypoints (coloured by
-visibility) and boxes, depth, normals, instance ids, layer ids, and each subject's amodal mask
-over its visible pixels."""
+visibility) and boxes, depth, normals, instance ids, layer ids, each subject's amodal mask
+over its visible pixels, and the optical flow (colour wheel)."""
 from __future__ import annotations
 
 import numpy as np
@@ -63,6 +63,18 @@ def _amodal(sample: Sample) -> np.ndarray:
     return out
 
 
+def flow_colours(flow: np.ndarray, scale: float | None = None) -> np.ndarray:
+    """The usual flow colour wheel: hue = direction, saturation = length / ``scale`` (default:
+    the 99th percentile length)."""
+    import colorsys
+    mag = np.linalg.norm(flow, axis=-1)
+    scale = scale or max(float(np.percentile(mag, 99)), 1e-6)
+    hue = (np.arctan2(-flow[..., 1], -flow[..., 0]) / (2 * np.pi) + 0.5) % 1.0
+    sat = np.clip(mag / scale, 0, 1)
+    rgb = np.vectorize(lambda h, s: colorsys.hsv_to_rgb(h, s, 1.0), otypes=[float, float, float])(hue, sat)
+    return (np.stack(rgb, -1) * 255).astype(np.uint8)
+
+
 def sample_panel(sample: Sample, columns: int = 3) -> np.ndarray:
     """(H', W', 3) uint8 panel of the sample's labels."""
     tiles = [_annotated_rgb(sample), _depth(sample)]
@@ -73,4 +85,8 @@ def sample_panel(sample: Sample, columns: int = 3) -> np.ndarray:
     tiles.append(_ids_to_colours(sample.layer.astype(np.int64) * 7919))
     if sample.subjects:
         tiles.append(_amodal(sample))
+    for name in ("flow_fwd", "flow_bwd"):
+        if name in sample.passes:
+            tiles.append(flow_colours(sample.passes[name]))
+            break
     return contact_sheet(tiles, columns)

@@ -1,0 +1,97 @@
+"""Exact optical flow against analytic answers: a translating plane, a moving camera, a
+rotating box (its position pass rotated and projected by hand), occlusion and out-of-view
+flags."""
+import numpy as np
+import pytest
+import trimesh
+
+from synmitsuba.annotate.flow import BACKGROUND, HIDDEN, OUTSIDE, SEEN, Geometry, exact_flow
+
+PLANE = np.array([[-3.0, -3, 0], [3, -3, 0], [3, 3, 0], [-3, 3, 0]])
+QUAD = np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def _plane_scene(sm):
+    scene = sm.Scene()
+    scene.add_mesh("plane", PLANE, QUAD, instance=1)
+    return scene
+
+
+def test_translating_plane_and_moving_camera(sm):
+    scene = _plane_scene(sm)
+    cam = sm.Camera.look_at(eye=(0, 0, 5.0), target=(0, 0, 0), fov_y_deg=40, width=32, height=24)
+    now, then = Geometry({"plane": PLANE}), Geometry({"plane": PLANE + [0.1, 0.05, 0]})
+    flow, flags = exact_flow(scene, cam, cam, now, then)
+    fx, fy = cam.K[0, 0], cam.K[1, 1]
+    assert (flags[:, :-1] == SEEN).all() and (flags[:, -1] == OUTSIDE).all()  # 0.66 px right: the last column leaves
+    assert np.allclose(flow[..., 0], fx * 0.1 / 5, atol=1e-3) and np.allclose(flow[..., 1], -fy * 0.05 / 5, atol=1e-3)
+    moved = sm.Camera.look_at(eye=(0.2, 0, 5.0), target=(0.2, 0, 0), fov_y_deg=40, width=32, height=24)
+    flow, flags = exact_flow(scene, cam, moved, now, now)
+    assert np.allclose(flow[..., 0], -fx * 0.2 / 5, atol=1e-3) and np.allclose(flow[..., 1], 0, atol=1e-3)
+    assert np.array_equal(scene.meshes["plane"].vertices, PLANE)  # the scene is back at its own frame
+
+
+def test_rotating_box_matches_its_position_pass_rotated(sm):
+    from synmitsuba.geometry import axis_rotation
+    box = trimesh.creation.box(extents=(1.0, 1.2, 0.8))
+    scene = sm.Scene()
+    scene.add_mesh("box", box.vertices, box.faces, instance=2)
+    cam = sm.Camera.look_at(eye=(1.5, 1.2, 3.5), target=(0, 0, 0), fov_y_deg=35, width=40, height=32)
+    R = axis_rotation("y", np.radians(40.0))
+    flow, flags = exact_flow(scene, cam, cam, Geometry({"box": box.vertices}), Geometry({"box": box.vertices @ R.T}))
+    s = sm.render(scene, cam, spp=1)
+    hit = s.mask
+    uv, _ = cam.project(s.position[hit] @ R.T)
+    px = np.stack(np.meshgrid(np.arange(40) + 0.5, np.arange(32) + 0.5), -1)[hit]
+    assert np.abs(flow[hit] - (uv - px)).max() < 2e-3
+    assert (flags[~hit] == BACKGROUND).all() and (flow[~hit] == 0).all()
+    assert (flags[hit] == HIDDEN).any() and (flags[hit] == SEEN).mean() > 0.7  # faces turning away get hidden
+
+
+def test_occluder_and_out_of_view_flags(sm):
+    scene = _plane_scene(sm)
+    cube = trimesh.creation.box(extents=(0.6, 0.6, 0.6))
+    v0 = cube.vertices + [-1.0, 0, 1.0]
+    scene.add_mesh("cube", v0, cube.faces, instance=3)
+    cam = sm.Camera.look_at(eye=(0, 0, 5.0), target=(0, 0, 0), fov_y_deg=40, width=48, height=36)
+    then = Geometry({"plane": PLANE, "cube": v0 + [1.0, 0, 0]})
+    flow, flags = exact_flow(scene, cam, cam, Geometry({"plane": PLANE, "cube": v0}), then)
+    scene_then = _plane_scene(sm)
+    scene_then.add_mesh("cube", v0 + [1.0, 0, 0], cube.faces, instance=3)
+    inst_then = sm.render(scene_then, cam, spp=1).instance
+    now_inst = sm.render(scene, cam, spp=1).instance
+    hidden = (flags == HIDDEN) & (now_inst == 1)
+    assert hidden.sum() > 20
+    ys, xs = np.nonzero(hidden)
+    to = np.floor(np.stack([xs + 0.5, ys + 0.5], -1) + flow[ys, xs]).astype(int)
+    assert (inst_then[to[:, 1], to[:, 0]] == 3).all()  # hidden plane points land on the cube at g
+    gone = Geometry({"plane": PLANE + [20.0, 0, 0], "cube": v0})
+    _, flags = exact_flow(scene, cam, cam, Geometry({"plane": PLANE, "cube": v0}), gone)
+    assert (flags[now_inst == 1] == OUTSIDE).all()
+
+
+def test_render_sequence_writes_flow_with_hair(sm, tmp_path):
+    import numpy as np
+
+    from synmitsuba.compose.subjects import PlacedSubject
+    human = sm.build_subject(sm.sample_subject(np.random.default_rng(2), {"hair_style": "long", "texture_size": 64}))
+    clip = sm.retarget(sm.procedural_motion("wave", np.random.default_rng(0), seconds=0.3), human.skeleton)
+    from synmitsuba.annotate.flow import subjects_geometry
+    p = PlacedSubject(human, clip, 0, 100, "s0")
+    scene = sm.Scene()
+    p.pose_in(scene, 4)
+    head = human.keypoints(*clip.frame(4))[0]
+    cam = sm.Camera.look_at(eye=head + [0, 0.1, 1.2], target=head, fov_y_deg=40, width=48, height=48)
+    flow, flags = exact_flow(scene, cam, cam, subjects_geometry([p], 4), subjects_geometry([p], 5))
+    s = sm.render(scene, cam, spp=1)
+    hair = s.layer == 6
+    assert hair.sum() > 50 and (flags[hair] != BACKGROUND).all()
+    (A0, b0), (A1, b1) = [(T[0][human.head_bone], T[1][human.head_bone]) for T in
+                          (human._transforms(*clip.frame(4)), human._transforms(*clip.frame(5)))]
+    moved = (np.linalg.inv(A0) @ (s.position[hair] - b0).T).T @ A1.T + b1  # rigid with the head, by hand
+    uv, _ = cam.project(moved)
+    px = np.stack(np.meshgrid(np.arange(48) + 0.5, np.arange(48) + 0.5), -1)[hair]
+    assert np.abs(flow[hair] - (uv - px)).max() < 1e-2
+    assert np.array_equal(scene.curves["s0_hair"].points, human.pose(*clip.frame(4))[-1].points)
+    with pytest.raises(Exception):
+        subjects_geometry([p], clip.n_frames + 5)
