@@ -61,6 +61,15 @@ register_pass("flow_bwd", ("flow_bwd.X", "flow_bwd.Y"), "float32", doc="the same
 register_pass("flow_fwd_flag", ("flow_fwd.flag",), "uint8", "uint32",
               doc="0 seen at the next frame, 1 hidden there, 2 outside its image, 3 background")
 register_pass("flow_bwd_flag", ("flow_bwd.flag",), "uint8", "uint32", doc="the same for the previous frame")
+register_pass("body_part", ("body.part",), "uint8", "uint32", doc="1 + body part (synmitsuba.body.segments.PART_NAMES) "
+              "under the pixel's subject, clothes and hair included; 0 elsewhere")
+register_pass("body_face", ("body.face",), "int32", "uint32", doc="1 + anny face index of the body point under the pixel")
+register_pass("body_bary", ("body.u", "body.v"), "float32", doc="barycentric weights of that face's vertices 1 and 2")
+register_pass("body_depth", ("body.Z",), "float32", doc="z-depth of the body alone under clothes and hair; 0 elsewhere")
+register_pass("body_normal", ("body.X", "body.Y", "body.Z_normal"), "float32",
+              doc="unit normal of that body point, camera frame, facing the camera")
+register_pass("cloth_thickness", ("cloth.thickness",), "float32",
+              doc="body depth minus visible depth where a garment covers the body, metres")
 
 
 @dataclass

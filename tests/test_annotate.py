@@ -148,3 +148,39 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
     assert hd["anny.rotations"].shape[1:] == (len(walker.human.skeleton), 3)
     assert np.allclose(root_cam, walker.human.skeleton.rest_positions[0] + hd["anny.root_translation"])
     assert list(hd["instance"]) == [100, 101, 100, 101] and hd["image_path"][0].endswith("view0.png")
+
+
+def test_layered_body_passes_against_the_visible_surface(sm, walker):
+    """On skin pixels the body is the visible surface: body depth = depth, the surface point
+    (anny face + barycentrics) rebuilt on the posed mesh = the position pass, the part = the
+    nearest vertex's part; under the t-shirt the cloth lies millimetres to centimetres off the body."""
+    from scipy.spatial import cKDTree
+
+    from synmitsuba.annotate import Annotator
+    from synmitsuba.body.segments import PART_NAMES, vertex_parts
+    scene = _scene(sm, walker)
+    rot, root = walker.motion.frame(3)
+    c = walker.human.keypoints(rot, root)[:, [0, 2]].mean(0)
+    cam = sm.Camera.look_at(eye=(c[0] + 0.5, 1.2, c[1] + 2.5), target=(c[0], 1.0, c[1]), fov_y_deg=45, width=72,
+                            height=96)
+    s = sm.render(scene, cam, spp=1)
+    Annotator([walker]).annotate(s, scene, 3)
+    skin = (s.layer == 1) & (s.body_face > 0)
+    assert skin.sum() > 200
+    assert np.allclose(s.body_depth[skin], s.depth[skin], atol=2e-4)
+    body = walker.human.pose(rot, root)[0].vertices
+    anny = walker.human.split.source  # split vertices -> anny vertices; faces keep anny's order
+    faces = walker.human.split.faces[s.body_face[skin] - 1]
+    u, v = s.body_bary[skin, 0:1], s.body_bary[skin, 1:2]
+    rebuilt = (1 - u - v) * body[faces[:, 0]] + u * body[faces[:, 1]] + v * body[faces[:, 2]]
+    assert np.abs(rebuilt - s.position[skin]).max() < 2e-4
+    assert np.array_equal(anny[faces], walker.human.body.faces[s.body_face[skin] - 1])
+    parts = vertex_parts(walker.human.parts[0].weights, walker.human.skeleton.names)
+    nearest = parts[cKDTree(body).query(s.position[skin])[1]] + 1
+    assert (nearest == s.body_part[skin]).mean() > 0.9
+    seen = {PART_NAMES[p - 1] for p in np.unique(s.body_part[skin])}
+    assert "head" in seen and len(seen) >= 5, seen
+    assert (np.sum(s.body_normal[skin] * s.normal[skin], -1) > 0.95).mean() > 0.9
+    shirt = (s.layer == 2) & (s.body_face > 0)
+    assert shirt.sum() > 100 and 0.002 < np.median(s.cloth_thickness[shirt]) < 0.15  # a loose shirt: ~6 cm
+    assert (s.body_part[s.instance == 0] == 0).all() and (s.cloth_thickness[s.layer == 1] == 0).all()

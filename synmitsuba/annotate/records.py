@@ -1,4 +1,6 @@
-"""``Annotator``: per-subject records of one view at one frame (``sample.subjects``).
+"""``Annotator``: per-subject records of one view at one frame (``sample.subjects``) and the
+layered body passes (``annotate.body``: body part, surface point, body depth and normal, cloth
+thickness).
 
 A record (docs/FORMAT.md, "Subjects"): ``instance``; ``keypoints3d_world`` / ``keypoints3d_cam``
 (23, 3) COCO-17 + 6 foot points, metres; ``keypoints2d`` (23, 2) pixels (pixel (0, 0) spans
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from synmitsuba.annotate.body import BodyLayer
 from synmitsuba.annotate.bodyparams import body_params_in_camera
 from synmitsuba.annotate.keypoints import keypoint_visibility
 from synmitsuba.engine.raycast import cast
@@ -52,6 +55,7 @@ class Annotator:
         self.subjects = subjects
         self._alone = [Scene() for _ in subjects]
         self._frame: int | None = None
+        self.bodies = BodyLayer(subjects)
         self._posed: list = []  # per subject at self._frame: (keypoints, body vertices, joints)
 
     def _pose(self, frame: int) -> None:
@@ -64,6 +68,7 @@ class Annotator:
             p.human.add_to(self._alone[i], rot, root, instance=p.instance, prefix=p.prefix)
             body = next(m for n, m in self._alone[i].meshes.items() if n == f"{p.prefix}_body").vertices
             self._posed.append((p.human.keypoints(rot, root), body, _joints(p.human.skeleton, rot, root)))
+        self.bodies.pose([b for _, b, _ in self._posed])
         self._frame = frame
 
     def annotate(self, sample, scene: Scene, frame: int, valid=None) -> list[dict]:
@@ -83,6 +88,8 @@ class Annotator:
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
             records.append(rec)
         sample.subjects = records
+        sample.passes.update(self.bodies.passes(cam, sample.passes["instance"], sample.passes["depth"],
+                                                sample.passes["layer"]))
         return records
 
     def _amodal(self, i: int, instance: int, cam: Camera, rays: np.ndarray) -> np.ndarray:

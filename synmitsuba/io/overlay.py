@@ -85,6 +85,8 @@ def sample_panel(sample: Sample, columns: int = 3) -> np.ndarray:
     tiles.append(_ids_to_colours(sample.layer.astype(np.int64) * 7919))
     if sample.subjects:
         tiles.append(_amodal(sample))
+    if "body_part" in sample.passes:
+        tiles.append(_ids_to_colours(sample.body_part.astype(np.int64) * 7919))
     for name in ("flow_fwd", "flow_bwd"):
         if name in sample.passes:
             tiles.append(flow_colours(sample.passes[name]))
