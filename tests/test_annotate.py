@@ -184,3 +184,42 @@ def test_layered_body_passes_against_the_visible_surface(sm, walker):
     shirt = (s.layer == 2) & (s.body_face > 0)
     assert shirt.sum() > 100 and 0.002 < np.median(s.cloth_thickness[shirt]) < 0.15  # a loose shirt: ~6 cm
     assert (s.body_part[s.instance == 0] == 0).all() and (s.cloth_thickness[s.layer == 1] == 0).all()
+
+
+def test_bad_inputs_get_clear_answers(sm, walker, tmp_path):
+    """A camera looking away (keypoints behind it), samples without subjects: answers, not crashes."""
+    from synmitsuba.annotate import Annotator, layer_masks
+    scene = _scene(sm, walker)
+    away = sm.Camera.look_at(eye=(0.0, 1.0, 4.0), target=(0, 1.0, 8.0), width=32, height=24)
+    s = sm.render(scene, away, spp=1)
+    rec = Annotator([walker]).annotate(s, scene, 3)[0]
+    assert (rec["visibility"] == 0).all() and not rec["valid"] and rec["bbox_keypoints"] is None
+    assert rec["visible_fraction"] == 0.0 and not rec["amodal_mask"].any() and rec["layer_pixels"] == {}
+    bare = sm.render(scene, sm.Camera.look_at(eye=(0.0, 1.0, 4.0), target=(0, 0.9, 0), width=32, height=24), spp=1)
+    sm.write_sample(bare, tmp_path / "d" / "bare")  # rendered without annotation: no subjects
+    assert sm.read_sample(tmp_path / "d" / "bare").subjects == []
+    assert sm.export_coco(str(tmp_path / "d"), str(tmp_path / "c.json")) == {"images": 1, "annotations": 0}
+    assert sm.sample_panel(bare).shape[2] == 3
+    assert set(layer_masks(bare, 100)) >= {"body", "top"}
+
+
+def test_every_label_survives_the_files(sm, tmp_path):
+    """A composed sequence's sample written and read back: every pass (flow, body layers,
+    amodal) and every record field identical."""
+    cfg = {"environments": ["plaza"], "subjects": {"count": 1, "seconds": 0.3, "config": {"texture_size": 64}},
+           "cameras": {"count": 1, "width": 40, "height": 32, "azimuths": 6, "shells": 1, "pitches": 1, "points": 16,
+                       "score_frames": 1}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(1))
+    _, _, sample = next(sm.render_sequence(spec, frames=[3], spp=1))
+    sm.write_sample(sample, tmp_path / "x")
+    back = sm.read_sample(tmp_path / "x")
+    for name in ("flow_fwd", "flow_bwd", "flow_fwd_flag", "body_part", "body_face", "body_bary", "body_depth",
+                 "body_normal", "cloth_thickness"):
+        assert np.array_equal(back.passes[name], sample.passes[name]), name
+    a, b = sample.subjects[0], back.subjects[0]
+    for k in a:
+        if isinstance(a[k], dict):
+            assert all(np.array_equal(np.asarray(a[k][j]), np.asarray(b[k][j])) for j in a[k] if j != "phenotypes"), k
+        else:
+            assert np.array_equal(np.asarray(a[k], dtype=object if a[k] is None else None),
+                                  np.asarray(b[k], dtype=object if b[k] is None else None)), k

@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 import trimesh
 
+from synmitsuba.errors import ConfigError
+
 from synmitsuba.annotate.flow import BACKGROUND, HIDDEN, OUTSIDE, SEEN, Geometry, exact_flow
 
 PLANE = np.array([[-3.0, -3, 0], [3, -3, 0], [3, 3, 0], [-3, 3, 0]])
@@ -93,5 +95,5 @@ def test_render_sequence_writes_flow_with_hair(sm, tmp_path):
     px = np.stack(np.meshgrid(np.arange(48) + 0.5, np.arange(48) + 0.5), -1)[hair]
     assert np.abs(flow[hair] - (uv - px)).max() < 1e-2
     assert np.array_equal(scene.curves["s0_hair"].points, human.pose(*clip.frame(4))[-1].points)
-    with pytest.raises(Exception):
-        subjects_geometry([p], clip.n_frames + 5)
+    with pytest.raises(ConfigError, match=r"frame = 9: the clip has frames 0\.\.8: there is no flow"):
+        subjects_geometry([p], clip.n_frames)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.engine.raycast import cast, surface_hits
+from synmitsuba.errors import ConfigError
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
 
@@ -104,6 +105,9 @@ def subjects_geometry(subjects: list, frame: int) -> Geometry:
     every mesh layer's vertices and the head bone's transform for hair and beard."""
     g = Geometry()
     for p in subjects:
+        if not 0 <= int(frame) < p.motion.n_frames:
+            raise ConfigError("frame", frame, f"the clip has frames 0..{p.motion.n_frames - 1}: there is no flow "
+                              "before the first frame or past the last")
         rot, root = p.motion.frame(int(frame))
         for layer in p.human.pose(rot, root):
             if not layer.is_curves:

@@ -5,7 +5,7 @@ thickness).
 A record (docs/FORMAT.md, "Subjects"): ``instance``; ``keypoints3d_world`` / ``keypoints3d_cam``
 (23, 3) COCO-17 + 6 foot points, metres; ``keypoints2d`` (23, 2) pixels (pixel (0, 0) spans
 [0, 1) x [0, 1)); ``visibility`` (23,) classes (``annotate.keypoints.VISIBILITY``);
-``visible_fraction_kp`` (23,); ``joints3d_world`` (J, 3) joint centres; ``amodal_mask`` (H, W)
+``visible_fraction_kp`` (23,); ``joints3d_world`` / ``joints3d_cam`` (J, 3) joint centres; ``amodal_mask`` (H, W)
 bool: the subject alone, through pixel-centre rays; ``visible_fraction`` = visible / amodal
 pixels; ``bbox_visible``, ``bbox_amodal``, ``bbox_keypoints`` ``[x_min, y_min, x_max, y_max]``
 pixel edges (None when empty) with ``center`` and ``scale`` = 1.2 max(w, h) / 200 of the
@@ -23,6 +23,16 @@ from synmitsuba.annotate.keypoints import keypoint_visibility
 from synmitsuba.engine.raycast import cast
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
+
+
+def layer_masks(sample, instance: int) -> dict:
+    """The subject's visible pixels split by layer (from the layer pass): ``{layer name: (H, W)
+    bool}`` for every layer it shows (body = skin, top, bottom, dress, shoes, hair, beard,
+    accessory)."""
+    from synmitsuba.scene.layers import Layer
+    own = sample.passes["instance"] == instance
+    return {Layer(int(k)).name.lower(): own & (sample.passes["layer"] == k)
+            for k in np.unique(sample.passes["layer"][own])}
 
 
 def mask_box(mask: np.ndarray) -> list | None:
@@ -86,6 +96,7 @@ class Annotator:
             rec = self._record(p, rot, root, cam, scene, instances, amodal, sample.passes["instance"] == p.instance,
                                *self._posed[i])
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
+            rec["layer_pixels"] = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
             records.append(rec)
         sample.subjects = records
         sample.passes.update(self.bodies.passes(cam, sample.passes["instance"], sample.passes["depth"],
@@ -120,7 +131,7 @@ class Annotator:
         n_amodal = int(amodal.sum())
         return {"instance": int(p.instance), "keypoints3d_world": kp, "keypoints3d_cam": kp @ cam.R.T + cam.t,
                 "keypoints2d": kp2d, "visibility": vis, "visible_fraction_kp": frac,
-                "joints3d_world": joints,
+                "joints3d_world": joints, "joints3d_cam": joints @ cam.R.T + cam.t,
                 "amodal_mask": amodal, "visible_fraction": float(visible.sum() / n_amodal) if n_amodal else 0.0,
                 "bbox_visible": mask_box(visible), "bbox_amodal": mask_box(amodal), "bbox_keypoints": box,
                 "center": centre, "scale": scale,

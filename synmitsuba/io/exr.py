@@ -54,7 +54,7 @@ def _plain(value):
 
 
 ARRAY_KEYS = ("keypoints3d_world", "keypoints3d_cam", "keypoints2d", "visibility", "visible_fraction_kp",
-              "joints3d_world", "root_world")
+              "joints3d_world", "joints3d_cam", "root_world")
 
 
 def _record_back(rec: dict, ch: dict) -> dict:
