@@ -9,9 +9,8 @@ from synmitsuba.engine.variant import current_variant
 from synmitsuba.scene.scene import Scene
 
 
-def cast(scene: Scene, origins, directions, maxt=None) -> tuple[np.ndarray, np.ndarray]:
-    """Instance id (0: nothing) and distance (inf: nothing) of the first surface each ray
-    ``origins[i] + s * directions[i]`` (N, 3; unit directions) meets for s < ``maxt[i]``."""
+def _intersect(scene: Scene, origins, directions, maxt=None, coherent: bool = False):
+    """(built scene, preliminary intersection, hit mask, shape registry ids) of the rays."""
     import drjit as dr
     import mitsuba as mi
     current_variant()
@@ -22,11 +21,18 @@ def cast(scene: Scene, origins, directions, maxt=None) -> tuple[np.ndarray, np.n
                    mi.Vector3f(*(mi.Float(d[:, k].astype(np.float32)) for k in range(3))))
     if maxt is not None:
         ray.maxt = mi.Float(np.broadcast_to(np.asarray(maxt, np.float64), len(d)).astype(np.float32))
-    si = built.mi_scene.ray_intersect_preliminary(ray, coherent=False)
+    si = built.mi_scene.ray_intersect_preliminary(ray, coherent=coherent)
     hit = si.is_valid()
-    ids = built.lookup("instance", dr.reinterpret_array(mi.UInt32, si.shape), hit)
+    return built, si, hit, dr.reinterpret_array(mi.UInt32, si.shape)
+
+
+def cast(scene: Scene, origins, directions, maxt=None) -> tuple[np.ndarray, np.ndarray]:
+    """Instance id (0: nothing) and distance (inf: nothing) of the first surface each ray
+    ``origins[i] + s * directions[i]`` (N, 3; unit directions) meets for s < ``maxt[i]``."""
+    import drjit as dr
+    built, si, hit, reg = _intersect(scene, origins, directions, maxt)
     t = dr.select(hit, si.t, dr.inf)
-    return np.asarray(ids.numpy(), np.int64), np.asarray(t.numpy(), np.float64)
+    return np.asarray(built.lookup("instance", reg, hit).numpy(), np.int64), np.asarray(t.numpy(), np.float64)
 
 
 def first_hits(scene: Scene, origins, targets, shrink: float = 1e-4) -> np.ndarray:
@@ -42,20 +48,11 @@ def first_hits(scene: Scene, origins, targets, shrink: float = 1e-4) -> np.ndarr
 
 def surface_hits(scene: Scene, origins, directions) -> dict:
     """The first surface along each ray (N, 3; unit directions): ``instance``, ``shape`` (an
-    index into ``names``, -1 where nothing is hit), ``names`` (the scene's shape names), ``prim`` (triangle or curve segment index), ``u``, ``v``
-    (Mitsuba's ``prim_uv``: barycentric weights of vertices 1 and 2 on a triangle) and ``t``
-    (inf where nothing is hit)."""
+    index into ``names``, -1 where nothing is hit), ``names`` (the scene's shape names),
+    ``prim`` (triangle or curve segment index), ``u``, ``v`` (Mitsuba's ``prim_uv``: barycentric
+    weights of vertices 1 and 2 on a triangle) and ``t`` (inf where nothing is hit)."""
     import drjit as dr
-    import mitsuba as mi
-    current_variant()
-    built = build(scene)
-    d = np.asarray(directions, np.float64)
-    o = np.broadcast_to(np.asarray(origins, np.float64), d.shape)
-    ray = mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k].astype(np.float32)) for k in range(3))),
-                   mi.Vector3f(*(mi.Float(d[:, k].astype(np.float32)) for k in range(3))))
-    si = built.mi_scene.ray_intersect_preliminary(ray, coherent=True)
-    hit = si.is_valid()
-    reg = dr.reinterpret_array(mi.UInt32, si.shape)
+    built, si, hit, reg = _intersect(scene, origins, directions, coherent=True)
     shape = built.lookup("shape", reg, hit).numpy().astype(np.int64) - 1
     return {"instance": built.lookup("instance", reg, hit).numpy().astype(np.int64), "shape": shape,
             "names": list(built.names),
