@@ -36,11 +36,10 @@ llvm: $(STAMP)
 	fi
 
 demo: setup
-	$(VENV)/bin/synmitsuba render scenes/demo.yaml --out out/demo
-	$(VENV)/bin/synmitsuba motion preview walk --out out/demo --frames 6 --seed 6
-	$(VENV)/bin/synmitsuba compose configs/compose.yaml --seed 0 --out out/demo/compose --spp 16 --denoise oidn --quiet
-	@echo "demo pictures: $(CURDIR)/out/demo/*.png (views with EXR + JSON ground truth, walk_strip.png)"
-	@echo "composed scene: $(CURDIR)/out/demo/compose (scene.json, topdown.png, a render per camera)"
+	$(VENV)/bin/synmitsuba generate configs/demo.yaml --out out/demo
+	$(VENV)/bin/synmitsuba show out/demo --out out/demo/contact_sheet.png
+	$(VENV)/bin/synmitsuba stats out/demo
+	@echo "demo dataset: $(CURDIR)/out/demo (seq_*/ samples, manifest.jsonl, contact_sheet.png, stats.png)"
 
 test: setup
 	$(PY) -m pytest -q

@@ -18,7 +18,7 @@ _FROM = {
                          "DirectionalLight", "AreaLight", "Scene", "MeshShape", "CurveShape"),
     "synmitsuba.sample": ("Sample", "PASSES", "register_pass"),
     "synmitsuba.engine.variant": ("set_variant", "current_variant"),
-    "synmitsuba.io": ("write_sample", "read_sample", "SampleDataset", "list_samples", "to_srgb8", "write_png",
+    "synmitsuba.io": ("write_sample", "read_sample", "list_samples", "to_srgb8", "write_png",
                       "contact_sheet", "export_coco", "export_humandata", "sample_panel"),
     "synmitsuba.body": ("SubjectRecipe", "sample_subject", "build_subject", "LayeredHuman", "PosedLayer", "Skeleton",
                         "forward_kinematics", "anny_uv_masks", "GARMENT_KINDS", "ACCESSORY_KINDS"),
@@ -29,10 +29,13 @@ _FROM = {
                            "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
     "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
     "synmitsuba.annotate": ("Annotator",),
+    "synmitsuba.data": ("SynDataset",),
+    "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "generate"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}
 _EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function
 _EXPORTS["metrics"] = "synmitsuba.metrics:"
+_EXPORTS["SampleDataset"] = "synmitsuba.data.dataset:SynDataset"  # the earlier name of the one dataset class
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 __all__ = sorted(_EXPORTS)

@@ -1,8 +1,9 @@
-"""Writers and readers of samples: OpenEXR + JSON sidecar, PNG previews, the PyTorch dataset."""
+"""Writers and readers of samples: OpenEXR + JSON sidecar, PNG previews, label panels, COCO and
+HumanData exports."""
 from synmitsuba._lazy import lazy_exports
 
 _EXPORTS = {"write_sample": "synmitsuba.io.exr", "read_sample": "synmitsuba.io.exr",
-            "SampleDataset": "synmitsuba.io.dataset", "list_samples": "synmitsuba.io.dataset",
+            "list_samples": "synmitsuba.io.dataset",
             "to_srgb8": "synmitsuba.io.preview", "write_png": "synmitsuba.io.preview",
             "contact_sheet": "synmitsuba.io.preview", "export_coco": "synmitsuba.io.coco",
             "export_humandata": "synmitsuba.io.coco",

@@ -92,3 +92,16 @@ def sample_panel(sample: Sample, columns: int = 3) -> np.ndarray:
             tiles.append(flow_colours(sample.passes[name]))
             break
     return contact_sheet(tiles, columns)
+
+
+def dataset_sheet(stems: list, count: int = 6) -> np.ndarray:
+    """A contact sheet of up to ``count`` samples spread over ``stems``: per row the RGB with
+    keypoints and boxes, depth, instance ids, layer ids."""
+    from synmitsuba.io.exr import read_sample
+    picks = [stems[int(k)] for k in np.linspace(0, len(stems) - 1, min(count, len(stems)))]
+    tiles = []
+    for stem in picks:
+        s = read_sample(stem)
+        tiles += [_annotated_rgb(s), _depth(s), _ids_to_colours(s.instance),
+                  _ids_to_colours(s.layer.astype(np.int64) * 7919)]
+    return contact_sheet(tiles, 4)

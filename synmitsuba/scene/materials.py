@@ -136,6 +136,13 @@ class EnvMap:
     def pixels(self) -> np.ndarray:
         if isinstance(self.source, np.ndarray):
             arr = self.source
+        elif str(self.source).lower().endswith(".exr"):
+            # OpenEXR's own reader: mi.Bitmap's EXR loader hangs when drjit runs one thread
+            # (SYNMITSUBA_THREADS=1, as each worker of a 2-worker run on 2 cores does)
+            import OpenEXR
+            with OpenEXR.File(str(self.source), separate_channels=True) as f:
+                ch = f.channels()
+                arr = np.stack([ch[c].pixels for c in "RGB"], -1).astype(np.float32)
         else:
             import mitsuba as mi
             bmp = mi.Bitmap(str(self.source)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False)

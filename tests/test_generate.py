@@ -1,0 +1,136 @@
+"""Dataset generation: byte-identical files whatever the worker count, resumable runs that
+survive a killed worker, clear errors before any work, the PyTorch dataset over the result."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from synmitsuba.errors import ConfigError
+
+TINY = os.path.join(os.path.dirname(__file__), "..", "configs", "tiny.yaml")
+
+
+def _files(root) -> dict:
+    """Every file's bytes by relative path, but the run log (timings and host names)."""
+    out = {}
+    for folder, _, files in os.walk(root):
+        for f in files:
+            path = os.path.join(folder, f)
+            if f != "run.log":
+                out[os.path.relpath(path, root)] = open(path, "rb").read()
+    return out
+
+
+def _generate(out, *extra):
+    return subprocess.run([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",
+                           "--set", "frames=2", *extra], capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    out = tmp_path_factory.mktemp("gen") / "one"
+    run = _generate(out, "--workers", "1")
+    assert run.returncode == 0, run.stderr
+    return out
+
+
+def test_two_workers_write_the_same_bytes_as_one(tiny, tmp_path):
+    run = _generate(tmp_path / "two", "--workers", "2")
+    assert run.returncode == 0, run.stderr
+    a, b = _files(tiny), _files(tmp_path / "two")
+    assert sorted(a) == sorted(b) and len(a) > 10
+    assert [k for k in a if a[k] != b[k] and k != "manifest.jsonl"] == []
+    assert sorted(a["manifest.jsonl"].splitlines()) == sorted(b["manifest.jsonl"].splitlines())  # in finishing order
+    lines = [json.loads(x) for x in (tiny / "manifest.jsonl").read_text().splitlines()]
+    assert sorted(e["sequence"] for e in lines) == [0, 1] and all(len(e["samples"]) == 2 for e in lines)
+    log = [json.loads(x) for x in (tiny / "run.log").read_text().splitlines()]
+    assert all("seconds" in e and "host" in e for e in log)  # timings live in the log only
+    assert "seconds" not in (tiny / "seq_000000" / "f0000_cam0.json").read_text()
+
+
+def test_rerun_skips_complete_and_redoes_partial_sequences(tiny, tmp_path):
+    import shutil
+    out = tmp_path / "resume"
+    shutil.copytree(tiny, out)
+    lines = (out / "manifest.jsonl").read_text().splitlines()
+    (out / "manifest.jsonl").write_text(lines[0] + "\n" + lines[1][:20])  # sequence 1 torn mid-line: not complete
+    (out / "seq_000007.partial").mkdir()
+    run = _generate(out)
+    assert run.returncode == 0 and "1 done, 1 skipped" in run.stdout, run.stdout + run.stderr
+    entries = [json.loads(x) for x in (out / "manifest.jsonl").read_text().splitlines() if x.startswith("{") and
+               x.endswith("}")]
+    assert sorted(e["sequence"] for e in entries) == [0, 1] and not (out / "seq_000007.partial").exists()
+    assert _files(out)["seq_000001/f0000_cam0.exr"] == _files(tiny)["seq_000001/f0000_cam0.exr"]
+
+
+def test_a_killed_worker_loses_and_duplicates_nothing(tmp_path):
+    out = tmp_path / "kill"
+    proc = subprocess.Popen([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",
+                             "--set", "frames=2", "--sequences", "3", "--max-failures", "0"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not list(out.glob("*.partial")) and time.time() < deadline:
+        time.sleep(0.2)
+    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
+    workers = [c for c in children if "spawn_main" in open(f"/proc/{c}/cmdline").read().replace("\0", " ")]
+    assert workers, children
+    os.kill(int(workers[0]), signal.SIGKILL)  # mid-sequence
+    text, err = proc.communicate(timeout=300)
+    assert proc.returncode == 1 and "a worker died" in text, text + err  # reported, not dropped
+    done = [json.loads(x)["sequence"] for x in (out / "manifest.jsonl").read_text().splitlines()] \
+        if (out / "manifest.jsonl").exists() else []
+    run = _generate(out, "--sequences", "3")
+    assert run.returncode == 0, run.stderr
+    final = [json.loads(x)["sequence"] for x in (out / "manifest.jsonl").read_text().splitlines()]
+    assert sorted(final) == [0, 1, 2] and len(final) == 3 and set(done) <= set(final)
+    assert not list(out.glob("*.partial"))
+
+
+def test_bad_output_and_config_fail_before_any_work(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    run = _generate(blocker / "out")
+    assert run.returncode == 2 and "--out" in run.stderr and "cannot write there" in run.stderr
+    run = _generate(tmp_path / "o", "--set", "render.spp=0")
+    assert run.returncode == 2 and "render.spp = 0" in run.stderr
+    run = _generate(tmp_path / "o", "--set", "compose.cameras.coutn=2")
+    assert run.returncode == 2 and "compose.cameras.coutn" in run.stderr and not (tmp_path / "o" / "seq_000000").exists()
+
+
+def test_dataset_reads_images_and_person_crops_with_workers(sm, tiny):
+    import torch
+    ds = sm.SynDataset(tiny, modalities=["rgb", "depth", "instance"])
+    assert len(ds) == 4 and isinstance(ds, torch.utils.data.Dataset)
+    batch = next(iter(torch.utils.data.DataLoader(ds, batch_size=4, num_workers=2)))
+    assert batch["rgb"].shape == (4, 3, 72, 96) and batch["keypoints2d"].shape == (4, 1, 23, 3)
+    crops = sm.SynDataset(tiny, crop="person", size=64)
+    item = crops[0]
+    s = sm.read_sample(item["stem"])
+    rec = s.subjects[0]
+    A = item["K"].numpy() @ np.linalg.inv(s.camera.K)  # the crop's K is the camera's, moved and scaled
+    kp = rec["keypoints2d"] @ A[:2, :2].T + A[:2, 2]
+    assert np.allclose(item["keypoints2d"][:, :2].numpy(), kp, atol=1e-4)
+    assert item["image"].shape == (3, 64, 64) and item["mask"].float().mean() > 0.05
+    batch = next(iter(torch.utils.data.DataLoader(crops, batch_size=2, num_workers=2)))
+    assert batch["image"].shape == (2, 3, 64, 64) and batch["body_rotations_cam"].shape[1:] == (104, 3)
+    with pytest.raises(ConfigError, match="crop"):
+        sm.SynDataset(tiny, crop="face")
+
+
+def test_stats_count_what_the_manifest_lists(tiny):
+    run = subprocess.run([sys.executable, "-m", "synmitsuba", "stats", str(tiny)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    stats = json.loads((tiny / "stats.json").read_text())
+    manifest = [json.loads(x) for x in (tiny / "manifest.jsonl").read_text().splitlines()]
+    assert stats["sequences"] == len(manifest) and stats["samples"] == sum(len(e["samples"]) for e in manifest)
+    assert stats["subjects"] == sum(e["subjects"] for e in manifest)
+    assert sum(stats["keypoint_visibility"].values()) == 23 * stats["visible_fraction"]["n"]
+    assert stats["camera_pitch_deg"]["n"] == stats["samples"] and (tiny / "stats.png").stat().st_size > 10000
+    run = subprocess.run([sys.executable, "-m", "synmitsuba", "stats", str(tiny / "nothing")], capture_output=True,
+                         text=True)
+    assert run.returncode == 2 and "no complete samples" in run.stderr
