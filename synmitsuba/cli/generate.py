@@ -35,6 +35,6 @@ def add_parser(sub) -> None:
     p.add_argument("--ray-address", help="Ray cluster address (default: a local Ray)")
     p.add_argument("--max-failures", type=natural_int, default=2, help="retries of a failing sequence before it is reported")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config value, e.g. render.spp=16 "
-                   "(repeatable)")
+                   "(repeatable; default: the config as written)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
