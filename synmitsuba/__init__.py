@@ -30,12 +30,13 @@ _FROM = {
     "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
     "synmitsuba.annotate": ("Annotator",),
     "synmitsuba.data": ("SynDataset",),
-    "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "generate"),
+    "synmitsuba.generate": ("GenerateConfig", "load_generate_config"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}
 _EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function
 _EXPORTS["metrics"] = "synmitsuba.metrics:"
 _EXPORTS["SampleDataset"] = "synmitsuba.data.dataset:SynDataset"  # the earlier name of the one dataset class
+_EXPORTS["generate_dataset"] = "synmitsuba.generate.run:generate"  # sm.generate is the subpackage
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 __all__ = sorted(_EXPORTS)
