@@ -58,6 +58,7 @@ bench: setup
 	$(PY) bench/subjects_robustness.py 200
 	$(PY) bench/compose_cost.py
 	$(PY) bench/annotate_cost.py --views 4 --frames 3
+	$(PY) bench/generate_cost.py --sequences 6
 
 clean:
 	rm -rf out .pytest_cache

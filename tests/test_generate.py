@@ -134,3 +134,12 @@ def test_stats_count_what_the_manifest_lists(tiny):
     run = subprocess.run([sys.executable, "-m", "synmitsuba", "stats", str(tiny / "nothing")], capture_output=True,
                          text=True)
     assert run.returncode == 2 and "no complete samples" in run.stderr
+
+
+@pytest.mark.slow
+def test_ray_writes_the_same_files_as_the_local_pool(tiny, tmp_path):
+    pytest.importorskip("ray")
+    run = _generate(tmp_path / "ray", "--executor", "ray", "--workers", "2")
+    assert run.returncode == 0, run.stderr
+    a, b = _files(tiny), _files(tmp_path / "ray")
+    assert sorted(a) == sorted(b) and [k for k in a if a[k] != b[k] and k != "manifest.jsonl"] == []

@@ -56,9 +56,11 @@ def run_sequence(config: dict, index: int, out: str) -> dict:
         stems.append(stem)
     shutil.rmtree(final, ignore_errors=True)
     os.replace(partial, final)
+    import resource
     return {"sequence": index, "folder": name, "samples": stems, "frames": len(frames), "views": len(spec.views),
             "subjects": len(spec.subjects), "environment": spec.environment,
-            "seconds": round(time.perf_counter() - t0, 3)}
+            "seconds": round(time.perf_counter() - t0, 3), "pid": os.getpid(),
+            "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)}
 
 
 @dataclass
@@ -103,7 +105,7 @@ def _rewrite_manifest(out: str, entries: dict) -> None:
 
 
 def _append(out: str, entry: dict) -> None:
-    timing = {k: entry[k] for k in ("seconds",)}
+    timing = {k: entry[k] for k in ("seconds", "pid", "peak_rss_mb")}  # the run log's, not the dataset's
     clean = {k: v for k, v in entry.items() if k not in timing}
     with open(os.path.join(out, "manifest.jsonl"), "a") as fh:
         fh.write(json.dumps(clean, sort_keys=True) + "\n")
