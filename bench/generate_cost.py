@@ -57,9 +57,8 @@ def main(argv=None) -> int:
     report = {"config": "hps.yaml reduced: " + ", ".join(REDUCED), "runs": results}
     if len(results) > 1:
         report["speedup_2_over_1"] = round(results[0]["seconds"] / results[1]["seconds"], 2)
-    try:
-        import ray  # noqa: F401  (synmitsuba[ray])
-    except ImportError:
+    import importlib.util
+    if importlib.util.find_spec("ray") is None:
         report["ray"] = "not installed: pip install 'synmitsuba[ray]'"
     else:
         out = tempfile.mkdtemp(prefix="genray_")
