@@ -255,3 +255,25 @@ class Params:
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+def read_yaml(path, what: str, keys: str) -> dict:
+    """The top-level mapping of a YAML file; errors name ``what`` (e.g. "scene file"), the
+    path and, for malformed YAML, the line and column; ``keys`` says what the top level holds."""
+    import os
+
+    import yaml
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ConfigError(what, path, "no such file")
+    try:
+        with open(path) as fh:
+            data = yaml.safe_load(fh)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ConfigError(what, path, f"malformed YAML{at}: {getattr(exc, 'problem', exc)}") from None
+    data = {} if data is None else data  # an empty file: every default
+    if not isinstance(data, dict):
+        raise ConfigError(what, path, f"the top level must be a mapping ({keys})")
+    return data

@@ -17,7 +17,7 @@ from synmitsuba.compose.placement import PlacementConfig, frame_hulls, place_sub
 from synmitsuba.compose.spec import SceneSpec, SubjectSpec, ViewSpec, clip_motion, resolve_environment
 from synmitsuba.compose.subjects import place_motion
 from synmitsuba.errors import ConfigError
-from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, spec
+from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
 MOTION_FILES = ("*.bvh", "*.npz")
 
@@ -171,15 +171,6 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
 def load_compose_config(path: str) -> ComposeConfig:
     """A composition config from YAML (``configs/compose.yaml``); motion paths in it are taken
     from the file's folder. Every key is checked; errors name the key path."""
-    import yaml
-    if not os.path.isfile(path):
-        raise ConfigError("config file", path, "no such file")
-    try:
-        with open(path) as fh:
-            data = yaml.safe_load(fh) or {}
-    except yaml.YAMLError as exc:
-        raise ConfigError("config file", path, f"malformed YAML: {getattr(exc, 'problem', exc)}") from None
-    if not isinstance(data, dict):
-        raise ConfigError("config file", path, "the top level must be a mapping (environments, subjects, cameras, ...)")
+    data = read_yaml(path, "config file", "environments, subjects, cameras, ...")
     data.setdefault("base", os.path.dirname(os.path.abspath(path)))
     return ComposeConfig.from_dict(data, "")

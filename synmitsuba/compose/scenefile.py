@@ -11,13 +11,12 @@ import os
 from dataclasses import dataclass, field, fields
 
 import numpy as np
-import yaml
 
 from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects
 from synmitsuba.errors import ConfigError
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
-                               construct, mapping, optional, spec)
+                               construct, mapping, optional, read_yaml, spec)
 from synmitsuba.scene import (AreaLight, Camera, Constant, DirectionalLight, EnvMap, Layer, Material, PointLight,
                               Scene, SunSky)
 
@@ -198,19 +197,7 @@ def _camera(spec_: CameraSpec, where: str, settings: RenderSettings) -> tuple[st
 
 def read_scene_doc(path: str) -> SceneDoc:
     """The checked contents of a scene file (nothing built yet)."""
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise ConfigError("scene file", path, "no such file")
-    try:
-        with open(path) as fh:
-            doc = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ConfigError("scene file", path, f"malformed YAML{at}: {getattr(exc, 'problem', exc)}") from None
-    if not isinstance(doc, dict):
-        raise ConfigError("scene file", path, "the top level must be a mapping with objects, cameras, ...")
-    return SceneDoc.from_dict(doc, "")
+    return SceneDoc.from_dict(read_yaml(path, "scene file", "objects, cameras, ..."), "")
 
 
 def load_scene_file(path: str, seed: int | None = None, subjects: bool = True) -> SceneFile:

@@ -11,7 +11,7 @@ import yaml
 from synmitsuba.compose.composition import ComposeConfig
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.errors import ConfigError
-from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, optional, spec
+from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, optional, read_yaml, spec
 
 
 @dataclass
@@ -50,15 +50,7 @@ def _override(data: dict, assignment: str) -> None:
 def load_generate_config(path: str, overrides=()) -> GenerateConfig:
     """The config in ``path`` with ``overrides`` applied, every key checked (errors name the
     key path); the compose section's motion paths start at the file's folder."""
-    if not os.path.isfile(path):
-        raise ConfigError("config file", path, "no such file")
-    try:
-        with open(path) as fh:
-            data = yaml.safe_load(fh) or {}
-    except yaml.YAMLError as exc:
-        raise ConfigError("config file", path, f"malformed YAML: {getattr(exc, 'problem', exc)}") from None
-    if not isinstance(data, dict):
-        raise ConfigError("config file", path, "the top level must be a mapping (sequences, render, compose, ...)")
+    data = read_yaml(path, "config file", "sequences, render, compose, ...")
     for assignment in overrides:
         _override(data, assignment)
     compose = data.setdefault("compose", {})
