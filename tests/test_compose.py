@@ -40,7 +40,7 @@ def real_clips(sm):
     clips = []
     for i, kind in enumerate(["walk", "jog", "side_step", "wave"]):
         human = sm.build_subject(sm.sample_subject(np.random.default_rng(10 + i), {"texture_size": 64}))
-        clips.append(_subject_clip(human, kind, i, cfg, "", i)[1])
+        clips.append(_subject_clip(human, kind, i, cfg, "", i)[0])
     return clips
 
 

@@ -76,7 +76,7 @@ class Annotator:
         for i, p in enumerate(self.subjects):
             rot, root = p.motion.frame(frame % p.motion.n_frames)
             p.human.add_to(self._alone[i], rot, root, instance=p.instance, prefix=p.prefix)
-            body = next(m for n, m in self._alone[i].meshes.items() if n == f"{p.prefix}_body").vertices
+            body = self._alone[i].meshes[f"{p.prefix}_body"].vertices
             self._posed.append((p.human.keypoints(rot, root), body, _joints(p.human.skeleton, rot, root)))
         self.bodies.pose([b for _, b, _ in self._posed])
         self._frame = frame

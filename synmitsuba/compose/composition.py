@@ -58,7 +58,7 @@ def _motion_sources(cfg: SubjectsConfig, base: str) -> list[str]:
 
 
 def _subject_clip(human, source: str, seed: int, cfg: SubjectsConfig, base: str, i: int):
-    """The subject's clip centred on its mean root position, its per-frame ground hulls, its
+    """The per-frame ground hulls of the subject's clip centred on its mean root position, its
     tallest point over the clip and the lift that puts its lowest point over the clip on the
     ground (retargeting keeps the source's root height, not the new legs' contact)."""
     from synmitsuba.motion.retargeting import retarget
@@ -71,7 +71,7 @@ def _subject_clip(human, source: str, seed: int, cfg: SubjectsConfig, base: str,
         xz.append(pts[:, [0, 2]])
         height = max(height, float(pts[:, 1].max()))
         low = min(low, min(float(lay.vertices[:, 1].min()) for lay in layers if not lay.is_curves))
-    return motion, frame_hulls(xz), height - low, -low
+    return frame_hulls(xz), height - low, -low
 
 
 def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
@@ -98,7 +98,7 @@ def _score(scene, placed, subjects, trajs, frames, cfg: cams.CameraConfig, rng) 
             p.pose_in(scene, f)
         views = [_camera_at(t, f, cfg) for t in trajs]
         for s, (p, smp) in enumerate(zip(placed, samples)):
-            pts = smp.on(p.human.pose(*p.motion.frame(f))[0].vertices)
+            pts = smp.on(scene.meshes[f"{p.prefix}_body"].vertices)  # posed just above
             occ[:, s] += occlusion(scene, np.stack([t.eye[f] for t in trajs]), pts, p.instance)
             seen[:, s] += [in_view(cam, pts) for cam in views]
     return occ / len(frames), seen / len(frames)
@@ -132,7 +132,7 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
         recipe = sample_subject(np.random.default_rng(int(rng.integers(2 ** 31))), sc.config)
         source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
         human = build_subject(recipe)
-        motion, hulls, height, lift = _subject_clip(human, source, mseed, sc, cfg.base, i)
+        hulls, height, lift = _subject_clip(human, source, mseed, sc, cfg.base, i)
         drafts.append((recipe, {"source": source, "seed": mseed, "seconds": sc.seconds, "fps": sc.fps,
                                 "base": cfg.base}, hulls, height, human, lift))
     boxes = object_boxes(env)
