@@ -57,5 +57,6 @@ def surface_hits(scene: Scene, origins, directions) -> dict:
     return {"instance": built.lookup("instance", reg, hit).numpy().astype(np.int64), "shape": shape,
             "names": list(built.names),
             "prim": np.asarray(dr.select(hit, si.prim_index, 0).numpy(), np.int64),
-            "u": np.asarray(si.prim_uv.x.numpy(), np.float64), "v": np.asarray(si.prim_uv.y.numpy(), np.float64),
+            "u": np.asarray(dr.select(hit, si.prim_uv.x, 0.0).numpy(), np.float64),  # garbage (NaN) on misses
+            "v": np.asarray(dr.select(hit, si.prim_uv.y, 0.0).numpy(), np.float64),
             "t": np.asarray(dr.select(hit, si.t, dr.inf).numpy(), np.float64)}
