@@ -60,7 +60,16 @@ def run_sequence(config: dict, index: int, out: str) -> dict:
     return {"sequence": index, "folder": name, "samples": stems, "frames": len(frames), "views": len(spec.views),
             "subjects": len(spec.subjects), "environment": spec.environment,
             "seconds": round(time.perf_counter() - t0, 3), "pid": os.getpid(),
-            "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)}
+            "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1), "rss_mb": _rss_mb()}
+
+
+def _rss_mb() -> float | None:
+    """The worker's resident memory now (the peak above only grows, so a leak hides in it)."""
+    try:
+        with open("/proc/self/statm") as fh:
+            return round(int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20, 1)
+    except OSError:  # not Linux
+        return None
 
 
 @dataclass
@@ -105,7 +114,7 @@ def _rewrite_manifest(out: str, entries: dict) -> None:
 
 
 def _append(out: str, entry: dict) -> None:
-    timing = {k: entry[k] for k in ("seconds", "pid", "peak_rss_mb")}  # the run log's, not the dataset's
+    timing = {k: entry[k] for k in ("seconds", "pid", "peak_rss_mb", "rss_mb")}  # the run log's, not the dataset's
     clean = {k: v for k, v in entry.items() if k not in timing}
     with open(os.path.join(out, "manifest.jsonl"), "a") as fh:
         fh.write(json.dumps(clean, sort_keys=True) + "\n")
