@@ -31,10 +31,12 @@ _FROM = {
     "synmitsuba.annotate": ("Annotator",),
     "synmitsuba.data": ("SynDataset",),
     "synmitsuba.generate": ("GenerateConfig", "load_generate_config"),
+    "synmitsuba.diff": ("DiffScene", "fit_texture", "FitResult"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}
 _EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function
 _EXPORTS["metrics"] = "synmitsuba.metrics:"
+_EXPORTS["diff"] = "synmitsuba.diff:"
 _EXPORTS["SampleDataset"] = "synmitsuba.data.dataset:SynDataset"  # the earlier name of the one dataset class
 _EXPORTS["generate_dataset"] = "synmitsuba.generate.run:generate"  # sm.generate is the subpackage
 

@@ -1,0 +1,176 @@
+"""Differentiable textures: the drjit texture against the dataset's numpy one, every parameter
+type's gradient against central finite differences, fitting, a torch loss through dr.wrap."""
+import numpy as np
+import pytest
+
+from synmitsuba.body.textures import GarmentTextureParams, render_garment_texture
+from synmitsuba.errors import ConfigError
+
+QUAD = (np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], float), np.array([[0, 2, 1], [0, 3, 2]]),
+        np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float))
+TRUTH = GarmentTextureParams(pattern="stripes", decal="circle", base_lab=[60, 20, 10], pattern_lab=[30, -10, 20],
+                             pattern_scale=4, uv_rotation_deg=20, uv_offset=[0.13, 0.4], decal_center=[0.4, 0.6],
+                             decal_size=0.2)
+
+
+def quad_scene(sm, texture_size=64):
+    """A textured cloth quad beside a plain one (for the bitmap texture), under a constant sky."""
+    v, f, uv = QUAD
+    scene = sm.Scene()
+    scene.add_mesh("cloth", v, f, uv=uv, material=sm.Material(texture=render_garment_texture(TRUTH, texture_size)[0]))
+    scene.add_mesh("patch", v * 0.3 + [0, 0.01, 0], f, uv=uv,
+                   material=sm.Material(texture=np.random.default_rng(0).random((8, 8, 3)).astype(np.float32)))
+    scene.set_environment(sm.Constant(0.8))
+    return scene
+
+
+def top_camera(sm, size=32, eye=(0, 2.2, 0.01)):
+    return sm.Camera.look_at(eye=eye, target=(0, 0, 0), fov_y_deg=50, width=size, height=size)
+
+
+@pytest.mark.parametrize("pattern,decal", [("stripes", "circle"), ("checks", "star"), ("plaid", "band"),
+                                           ("dots", "number"), ("gradient", "none"), ("camouflage", "circle")])
+def test_procedural_texture_is_the_dataset_texture_with_antialiased_edges(sm, pattern, decal):
+    """Against numpy's hard-edged texture supersampled 8x (the area average of each texel): where
+    all 64 subsamples agree (away from edges) the drjit texture equals it (bar the odd texel
+    whose subsamples just miss an edge), and at edges it
+    stays close to the area average (a one-texel ramp, not a step)."""
+    from synmitsuba.diff.texture import ProceduralTexture
+    p = GarmentTextureParams(**{**TRUTH.to_dict(), "pattern": pattern, "decal": decal, "pattern_scale": 6.3,
+                                "uv_scale": 1.3})
+    proc = ProceduralTexture(p, 64)
+    got = np.array(proc.evaluate(proc.initial()))
+    assert got.shape == (64, 64, 3)
+    if pattern == "gradient":  # continuous: the same values at texel centres, bar its wrap seam
+        assert (np.abs(got - render_garment_texture(p, 64)[0]).max(-1) < 2e-4).mean() > 0.97
+        return
+    fine = render_garment_texture(p, 64 * 8)[0].reshape(64, 8, 64, 8, 3)
+    area = fine.mean((1, 3))
+    uniform = (np.ptp(fine, axis=(1, 3)) < 1e-6).all(-1)
+    assert uniform.mean() > 0.5
+    same = (np.abs(got - area).max(-1) < 2e-4)[uniform]
+    assert same.mean() > 0.995  # a texel whose 64 subsamples just miss an edge may see the ramp
+    assert np.abs(got - area)[~uniform].mean() < 0.06
+
+
+SEEDS = (11, 13, 17, 19)
+
+
+def _fd_check(sm, ds, cam, target, name, h, direction=None, spp=1024):
+    """(AD directional derivative, central difference) of an image MSE for variable ``name``."""
+    import drjit as dr
+    import mitsuba as mi
+    ref = mi.TensorXf(target)
+
+    def loss(seed):
+        return dr.mean(dr.square(ds.render(cam, spp=spp, seed=seed) - ref), axis=None)
+
+    x0 = ds.variables[name]
+    x = np.array(x0, dtype=np.float64)
+    direction = np.ones_like(x) / np.sqrt(x.size) if direction is None else direction
+    var = dr.detach(x0)
+    dr.enable_grad(var)
+    ds.variables[name] = var
+    ad = 0.0
+    for seed in SEEDS:  # the gradient pass traces its own paths (noise): average a few
+        dr.backward(loss(seed))
+        ad += float((np.array(dr.grad(var), dtype=np.float64) * direction).sum())
+        dr.clear_grad(var)
+    ad /= len(SEEDS)
+    values = []
+    for sign in (1, -1):
+        moved = x + sign * h * direction
+        ds.set(name, moved if ds.specs[name].kind == "texture" else moved.ravel().tolist())
+        values.append(sum(float(loss(seed).array[0]) for seed in SEEDS) / len(SEEDS))
+    ds.variables[name] = x0
+    return ad, (values[0] - values[1]) / (2 * h)
+
+
+def test_gradients_match_central_differences_for_every_parameter_type(sm):
+    """Colours, blend weights, pattern scale and phase, decal placement and size, a bitmap
+    texture, the environment's radiance: AD (prb) within 5 % of central differences of the
+    same image loss (averaged over 4 seeds), at 32 x 32 and 1024 spp."""
+    scene = quad_scene(sm)
+    ds = sm.DiffScene(scene)
+    ds.bind_procedural("cloth", TRUTH)
+    ds.bind_texture("patch")
+    cam = top_camera(sm)
+    target = np.array(ds.render(cam, spp=64, seed=5))
+    start = {"cloth.base_rgb": [0.3, 0.3, 0.3], "cloth.pattern_rgb": [0.1, 0.4, 0.2], "cloth.pattern_scale": 4.4,
+             "cloth.phase": [0.13, 0.43], "cloth.decal_center": [0.42, 0.58], "cloth.decal_size": 0.22,
+             "cloth.pattern_alpha": 0.7, "cloth.decal_alpha": 0.8, "environment.radiance": [0.5, 0.6, 1.1]}
+    for k, v in start.items():
+        ds.set(k, v)
+    ds.set("patch.texture", np.array(ds.variables["patch.texture"]) * 0.5)
+    steps = {"cloth.pattern_scale": 0.01, "cloth.phase": 0.002, "cloth.decal_center": 0.002, "cloth.decal_size": 0.002}
+    rng = np.random.default_rng(1)
+    errors = {}
+    for name in [*start, "patch.texture"]:
+        direction = None
+        if name == "patch.texture":
+            direction = rng.normal(size=np.array(ds.variables[name]).shape)
+            direction /= np.linalg.norm(direction)
+        ad, fd = _fd_check(sm, ds, cam, target, name, steps.get(name, 0.01), direction)
+        assert abs(fd) > 1e-5, name  # the loss does depend on it
+        errors[name] = abs(ad - fd) / abs(fd)
+    assert max(errors.values()) <= 0.05, errors
+
+
+def test_fit_texture_recovers_known_pattern_parameters_from_two_views(sm):
+    scene = quad_scene(sm)
+    ds = sm.DiffScene(scene)
+    ds.bind_procedural("cloth", TRUTH)
+    truth = {k: ds.get(k) for k in ("cloth.base_rgb", "cloth.pattern_rgb", "cloth.phase", "cloth.pattern_scale")}
+    cams = [top_camera(sm, 48), top_camera(sm, 48, eye=(0.8, 2.0, 0.6))]
+    targets = [np.array(ds.render(c, spp=64, seed=100 + i)) for i, c in enumerate(cams)]
+    # a start a user would make by eye: light cloth, dark stripes, roughly where they are
+    start = {"cloth.base_rgb": [0.6, 0.35, 0.3], "cloth.pattern_rgb": [0.15, 0.15, 0.1], "cloth.phase": [0.13, 0.42],
+             "cloth.pattern_scale": 4.1}
+    result = sm.fit_texture(ds, cams, targets, start, steps=60, spp=8, lr={"cloth.base_rgb": 0.03,
+                                                                          "cloth.pattern_rgb": 0.03})
+    assert len(result.losses) == 60 and result.seconds_per_step > 0
+    assert np.mean(result.losses[-5:]) < 0.1 * result.losses[0]
+    assert result.initial["cloth.pattern_scale"] == pytest.approx(4.1)
+    for k in ("cloth.base_rgb", "cloth.pattern_rgb"):
+        np.testing.assert_allclose(result.values[k], truth[k], atol=0.02, err_msg=k)
+    assert result.values["cloth.pattern_scale"] == pytest.approx(truth["cloth.pattern_scale"], abs=0.02)
+    assert result.values["cloth.phase"][1] == pytest.approx(truth["cloth.phase"][1], abs=0.005)
+
+
+def test_a_torch_loss_through_dr_wrap_gives_the_drjit_gradient(sm):
+    import drjit as dr
+    import mitsuba as mi
+    torch = pytest.importorskip("torch")
+
+    @dr.wrap(source="drjit", target="torch")
+    def torch_mse(img, ref):
+        return torch.mean((img - ref) ** 2)
+
+    ds = sm.DiffScene(quad_scene(sm))
+    ds.bind_procedural("cloth", TRUTH)
+    cam = top_camera(sm, 16)
+    ref = mi.TensorXf(np.full((16, 16, 3), 0.2, np.float32))
+    grads = []
+    for loss in (torch_mse, lambda a, b: dr.mean(dr.square(a - b), axis=None)):
+        var = dr.detach(ds.variables["cloth.base_rgb"])
+        dr.enable_grad(var)
+        ds.variables["cloth.base_rgb"] = var
+        dr.backward(loss(ds.render(cam, spp=4, seed=3), ref))
+        grads.append(np.array(dr.grad(var)).ravel())
+    assert np.abs(grads[0]).min() > 0
+    np.testing.assert_allclose(grads[0], grads[1], rtol=1e-4)
+
+
+def test_bad_inputs_name_the_field(sm):
+    ds = sm.DiffScene(quad_scene(sm))
+    with pytest.raises(ConfigError, match="bind_procedural"):
+        ds.set("cloth.base_rgb", [0.1, 0.2, 0.3])
+    with pytest.raises(ConfigError, match="scene's meshes"):
+        ds.bind_procedural("shirt", TRUTH)
+    cam = top_camera(sm, 16)
+    with pytest.raises(ConfigError, match=r"targets\[0\]"):
+        sm.fit_texture(ds, [cam], [np.zeros((8, 8, 3))], ["environment.radiance"], steps=1)
+    with pytest.raises(ConfigError, match="one target image per camera"):
+        sm.fit_texture(ds, [cam, cam], [np.zeros((16, 16, 3))], ["environment.radiance"], steps=1)
+    with pytest.raises(ConfigError, match="integrator"):
+        sm.DiffScene(quad_scene(sm), integrator="path")
