@@ -174,3 +174,36 @@ def test_bad_inputs_name_the_field(sm):
         sm.fit_texture(ds, [cam, cam], [np.zeros((16, 16, 3))], ["environment.radiance"], steps=1)
     with pytest.raises(ConfigError, match="integrator"):
         sm.DiffScene(quad_scene(sm), integrator="path")
+
+
+def test_cli_fit_texture_round_trip_recovers_a_garment_colour(sm, tmp_path):
+    """make-targets renders a subject; fitting from a recipe whose t-shirt has another colour
+    brings the colour back (CIELAB distance) and writes the fit, the recipe and a comparison."""
+    import json
+
+    from synmitsuba.body.recipe import SubjectRecipe
+    from synmitsuba.body.textures import lab_to_linear_rgb
+    from synmitsuba.cli import main
+    recipe = sm.sample_subject(np.random.default_rng(7), {"outfit": ["tshirt", "trousers"], "jacket": False,
+                                                          "hair_style": "bald", "accessories": [], "texture_size": 64})
+    shirt = next(g for g in recipe.garments if g.kind == "tshirt")
+    shirt.texture.pattern, shirt.texture.decal, shirt.texture.bump = "none", "none", "none"
+    truth = list(shirt.texture.base_lab)
+    (tmp_path / "truth.json").write_text(recipe.to_json())
+    targets = tmp_path / "targets"
+    assert main(["fit-texture", str(targets), "--subject", str(tmp_path / "truth.json"), "--make-targets", "2",
+                 "--size", "32", "--target-spp", "16"]) == 0
+    shirt.texture.base_lab = [50.0, 0.0, 0.0]
+    (tmp_path / "guess.json").write_text(recipe.to_json())
+    out = tmp_path / "fit"
+    assert main(["fit-texture", str(targets), "--subject", str(tmp_path / "guess.json"), "--out", str(out),
+                 "--garment", "tshirt", "--params", "base_rgb", "--steps", "30", "--spp", "4", "--lr", "0.03",
+                 "--quiet"]) == 0
+    fit = json.loads((out / "fit.json").read_text())
+    assert fit["losses"][-1] < fit["losses"][0]  # (the floor is the targets' and the fit's noise)
+    fitted = SubjectRecipe.from_json((out / "recipe.json").read_text())
+    got = next(g for g in fitted.garments if g.kind == "tshirt").texture.base_lab
+    np.testing.assert_allclose(lab_to_linear_rgb(got), lab_to_linear_rgb(truth), atol=0.03)
+    assert (out / "compare.png").is_file()
+    assert main(["fit-texture", str(targets), "--subject", str(tmp_path / "guess.json"), "--out", str(out),
+                 "--params", "colour"]) == 2  # one line naming --params

@@ -29,6 +29,13 @@ def lab_to_linear_rgb(lab) -> np.ndarray:
     return np.clip(rgb, 0.0, 1.0)
 
 
+def linear_rgb_to_lab(rgb) -> list[float]:
+    """Inverse of ``lab_to_linear_rgb`` (for colours fitted in linear RGB)."""
+    colour = import_colour()
+    xyz = colour.RGB_to_XYZ(np.clip(np.asarray(rgb, dtype=np.float64), 1e-6, 1.0), "sRGB", apply_cctf_decoding=False)
+    return [round(float(x), 3) for x in colour.XYZ_to_Lab(xyz)]
+
+
 def sample_lab_colour(rng: np.random.Generator, l_range=(20, 85), chroma=(5, 70)) -> list[float]:
     L = rng.uniform(*l_range)
     c = rng.uniform(*chroma)

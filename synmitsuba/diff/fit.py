@@ -17,7 +17,7 @@ import numpy as np
 
 from synmitsuba.diff.scene import DiffScene
 from synmitsuba.errors import ConfigError
-from synmitsuba.schema import POSITIVE
+from synmitsuba.schema import POSITIVE, Number
 
 
 @dataclass
@@ -59,7 +59,7 @@ def _learning_rates(ds: DiffScene, names: list, lr) -> dict:
         if unknown:
             raise ConfigError("lr", unknown[0], f"give learning rates only for fitted variables: {', '.join(names)}")
         return {k: float(lr.get(k, ds.specs[k].lr)) for k in names}
-    return {k: float(POSITIVE("lr", lr)) for k in names}
+    return {k: float(Number(1e-9, 100)("lr", lr)) for k in names}
 
 
 def fit_texture(scene: DiffScene, cameras: list, targets: list, params, steps: int = 50, lr=None, spp: int = 16,

@@ -130,6 +130,14 @@ class DiffScene:
             self.params["environment.data"] = self._envmap * v["environment.intensity"]
         self.params.update()
 
+    def _driven_keys(self) -> list:
+        keys = [key for key, _ in self._textures.values()]
+        if "environment.radiance" in self.variables:
+            keys.append("environment.radiance.value")
+        if "environment.intensity" in self.variables:
+            keys.append("environment.data")
+        return keys
+
     def render(self, camera: Camera, spp: int = 16, seed: int = 0):
         """The RGB image (H, W, 3) as a drjit tensor, differentiable in the variables whose
         gradients are enabled (``dr.enable_grad(ds.variables[name])``). The gradient pass traces
@@ -142,7 +150,10 @@ class DiffScene:
         sensor_mod.register(current_variant())
         self.apply()
         sensor = mi.load_dict(sensor_mod.sensor_dict(camera, spp))
-        img = mi.render(self.built.mi_scene, self.params, sensor=sensor, integrator=self.integrator, spp=spp,
+        # only the parameters the variables drive (a full dict(params) fails on curve shapes' entries)
+        driven = self.params.copy()
+        driven.keep(self._driven_keys())
+        img = mi.render(self.built.mi_scene, driven, sensor=sensor, integrator=self.integrator, spp=spp,
                         seed=seed, seed_grad=seed + 1)
         return img[:, :, :3] if img.shape[2] > 3 else img
 
