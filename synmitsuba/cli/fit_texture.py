@@ -103,7 +103,7 @@ def add_parser(sub) -> None:
                    help="instead of fitting: render N ring views of --subject into TARGETS (a round trip to try)")
     p.add_argument("--garment", help="fit one garment kind only (default: every garment)")
     p.add_argument("--params", default=DEFAULT_PARAMS, help="comma-separated texture variables to fit")
-    p.add_argument("--steps", type=positive_int, default=60)
+    p.add_argument("--steps", type=positive_int, default=60, help="Adam steps")
     p.add_argument("--spp", type=positive_int, default=8, help="samples per pixel while fitting")
     p.add_argument("--lr", type=positive_float, help="Adam learning rate for all (default: each variable's own)")
     p.add_argument("--size", type=positive_int, default=96, help="image side of --make-targets")
