@@ -98,9 +98,9 @@ def add_parser(sub) -> None:
                        "recipe.json (the recipe with the fitted textures) and compare.png (target | fitted).")
     p.add_argument("targets", help="folder of target samples (EXR + JSON with the camera)")
     p.add_argument("--subject", required=True, help="the subject's recipe JSON (the garments' starting textures)")
-    p.add_argument("--out", help="output folder (required unless --make-targets)")
+    p.add_argument("--out", help="output folder (no default: required unless --make-targets)")
     p.add_argument("--make-targets", type=positive_int, metavar="N",
-                   help="instead of fitting: render N ring views of --subject into TARGETS (a round trip to try)")
+                   help="instead of fitting: render N ring views of --subject into TARGETS, a round trip to try (default: fit)")
     p.add_argument("--garment", help="fit one garment kind only (default: every garment)")
     p.add_argument("--params", default=DEFAULT_PARAMS, help="comma-separated texture variables to fit")
     p.add_argument("--steps", type=positive_int, default=60, help="Adam steps")
