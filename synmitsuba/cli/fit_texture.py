@@ -85,9 +85,9 @@ def run(args) -> int:
 
 
 def _write(path: str, text: str) -> None:
-    with open(f"{path}.tmp", "w") as fh:
+    from synmitsuba.io.preview import atomic_path
+    with atomic_path(path) as tmp, open(tmp, "w") as fh:  # complete or absent, Ctrl-C included
         fh.write(text)
-    os.replace(f"{path}.tmp", path)
 
 
 def add_parser(sub) -> None:

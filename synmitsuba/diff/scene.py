@@ -107,8 +107,8 @@ class DiffScene:
 
     def get(self, name: str):
         """A variable as plain numbers (float or list; the texture as an array)."""
-        value = self.variables[name] if self._spec(name) else None
-        return np.array(value) if self.specs[name].kind == "texture" else as_numbers(value)
+        kind = self._spec(name).kind
+        return np.array(self.variables[name]) if kind == "texture" else as_numbers(self.variables[name])
 
     def _spec(self, name: str) -> Variable:
         if name not in self.specs:
