@@ -4,7 +4,7 @@ memory, at 128 x 128 and 16 spp, for a subject whose t-shirt's base and stripe c
 and phase are fitted; beside it a plain (non-differentiable) mi.render of the same loaded
 scene and spp with the path tracer, as the ratio.
 
-    python bench/diff_cost.py [--size 128] [--spp 16] [--steps 5]
+    python bench/diff_cost.py [--size 128] [--spp 16] [--steps 5] [--subjects FILE]
 """
 from __future__ import annotations
 
@@ -14,6 +14,17 @@ import resource
 import time
 
 import numpy as np
+from subject_cache import cached
+
+
+def build_subject():
+    """A subject in a striped t-shirt and trousers, and its recipe."""
+    import synmitsuba as sm
+    recipe = sm.sample_subject(np.random.default_rng(7), {"outfit": ["tshirt", "trousers"], "jacket": False,
+                                                          "texture_size": 256})
+    shirt = next(g for g in recipe.garments if g.kind == "tshirt")
+    shirt.texture.pattern, shirt.texture.bump = "stripes", "none"
+    return recipe, sm.build_subject(recipe)
 
 
 def main(argv=None) -> int:
@@ -21,19 +32,18 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--steps", type=int, default=5)
+    ap.add_argument("--subjects", help="file of the built subject: read if present, else written (subject_cache.py)")
     args = ap.parse_args(argv)
     import mitsuba as mi
     import synmitsuba as sm
     from synmitsuba.engine.variant import current_variant
     from synmitsuba.render import sensor as sensor_mod
     sm.set_variant()
-    recipe = sm.sample_subject(np.random.default_rng(7), {"outfit": ["tshirt", "trousers"], "jacket": False,
-                                                          "texture_size": 256})
+    recipe, human = cached(args.subjects, build_subject)
     shirt = next(g for g in recipe.garments if g.kind == "tshirt")
-    shirt.texture.pattern, shirt.texture.bump = "stripes", "none"
     scene = sm.Scene()
     scene.set_environment(sm.Constant(1.0))
-    sm.build_subject(recipe).add_to(scene, instance=1)
+    human.add_to(scene, instance=1)
     ds = sm.DiffScene(scene)
     ds.bind_procedural("subject1_tshirt", shirt.texture)
     cam = sm.Camera.look_at(eye=(0, 1.3, 2.6), target=(0, 1.1, 0), fov_y_deg=30, width=args.size, height=args.size)

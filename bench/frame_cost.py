@@ -5,7 +5,7 @@ in-place updates), sm.render (RGB + exact passes + coverage), denoising and writ
 run a raw ``mi.render`` of the same loaded scene with a plain ``perspective`` sensor at the same
 size, spp and sampler. Also the resident memory after each frame. Prints JSON.
 
-    python bench/frame_cost.py [--frames 30] [--res 256] [--spp 16] [--denoise none|oidn] [--coverage 16]
+    python bench/frame_cost.py [--frames 30] [--res 256] [--spp 16] [--denoise none|oidn] [--coverage 16] [--subjects FILE]
 """
 import argparse
 import json
@@ -16,11 +16,24 @@ import tempfile
 import time
 
 import numpy as np
+from subject_cache import cached
 
 
 def rss_mb() -> float:
     with open("/proc/self/statm") as fh:
         return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
+
+
+def build_subjects(frames: int) -> list:
+    """Two subjects with shoulder-length hair, walking and waving side by side."""
+    import synmitsuba as sm
+    subjects = []
+    for k, (kind, x) in enumerate((("walk", -0.6), ("wave", 0.7))):
+        rng = np.random.default_rng(10 + k)
+        human = sm.build_subject(sm.sample_subject(rng, {"hair_style": "shoulder"}))
+        clip = sm.retarget(sm.procedural_motion(kind, rng, seconds=max(1.0, frames / 30)), human.skeleton)
+        subjects.append((human, clip.moved(0, (x, 0, 0)), 1 + k))
+    return subjects
 
 
 def main(argv=None) -> dict:
@@ -30,6 +43,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--denoise", default="none")
     ap.add_argument("--coverage", type=int, default=9, help="coverage_samples (sub-pixel rays for alpha)")
+    ap.add_argument("--out", help="folder for the written samples (default: a temporary folder)")
+    ap.add_argument("--subjects", help="file of built subjects: read if present, else written (see subject_cache.py)")
     args = ap.parse_args(argv)
     import mitsuba as mi
 
@@ -39,18 +54,14 @@ def main(argv=None) -> dict:
     from synmitsuba.render.denoise import choose_sampler
     sm.set_variant()
     scene = preview_stage()
-    subjects = []
-    for k, (kind, x) in enumerate((("walk", -0.6), ("wave", 0.7))):
-        rng = np.random.default_rng(10 + k)
-        human = sm.build_subject(sm.sample_subject(rng, {"hair_style": "shoulder"}))
-        clip = sm.retarget(sm.procedural_motion(kind, rng, seconds=max(1.0, args.frames / 30)), human.skeleton)
-        subjects.append((human, clip.moved(0, (x, 0, 0)), 1 + k))
+    subjects = cached(args.subjects, lambda: build_subjects(args.frames))
     views = [sm.Camera.look_at(eye=(0.5, 1.3, 5.0), target=(0, 0.9, 0), fov_y_deg=40, width=args.res, height=args.res),
              sm.Camera.look_at(eye=(4.0, 1.6, 2.5), target=(0, 0.9, 0), fov_y_deg=40, width=args.res, height=args.res)]
     sampler = choose_sampler("auto", args.spp)
     path = mi.load_dict({"type": "path", "max_depth": 6})  # what sm.render uses (max_depth 6)
     rows, rss = [], []
-    out = tempfile.mkdtemp(prefix="synmitsuba-frame-cost-")
+    out = args.out or tempfile.mkdtemp(prefix="synmitsuba-frame-cost-")
+    os.makedirs(out, exist_ok=True)
     for f in range(args.frames):
         t0 = time.perf_counter()
         for human, clip, inst in subjects:
@@ -86,7 +97,8 @@ def main(argv=None) -> dict:
     def med(key):
         return round(statistics.median(r[key] for r in later), 4)
     ours = med("pose_s") + med("update_s") + med("render_s")
-    result = {"bench": "frame_cost", "frames": args.frames, "views": len(views), "res": args.res, "spp": args.spp,
+    from synmitsuba.engine.variant import current_variant
+    result = {"bench": "frame_cost", "variant": current_variant(), "frames": args.frames, "views": len(views), "res": args.res, "spp": args.spp,
               "sampler": sampler, "denoise": args.denoise, "coverage_samples": args.coverage, "first_frame_s": round(sum(rows[0].values()), 3),
               "per_frame_median_s": {k: med(k) for k in rows[0]},
               "frame_over_raw": round(ours / max(med("raw_s"), 1e-9), 3), "goal_frame_over_raw": 1.10,

@@ -1,7 +1,7 @@
 """synmitsuba: synthetic, exactly annotated datasets of people rendered with Mitsuba 3.
 
     import synmitsuba as sm
-    sm.set_variant()                     # llvm_ad_rgb on the CPU
+    sm.set_variant()                     # cuda_ad_rgb on a GPU, else llvm_ad_rgb
     scene = sm.Scene(); scene.add_mesh(...)
     sample = sm.render(scene, sm.Camera.look_at(...), spp=16, seed=0)
     sm.write_sample(sample, "out/0000")

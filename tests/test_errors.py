@@ -57,6 +57,16 @@ def test_spp_must_be_positive(sm):
         check(e, "spp", repr(bad))
 
 
+def test_auto_variant_is_the_cpu_one_without_an_nvidia_driver(sm):
+    import os
+
+    from synmitsuba.engine.variant import auto_variant
+    if os.path.exists("/dev/nvidiactl"):
+        pytest.skip("an NVIDIA driver is present: auto may pick cuda_ad_rgb")
+    assert auto_variant() == "llvm_ad_rgb"
+    assert sm.set_variant("auto") == sm.current_variant() == "llvm_ad_rgb"
+
+
 def test_unknown_variant(sm):
     with pytest.raises(ConfigError) as e:
         sm.set_variant("llvm_rgb_nonexistent")

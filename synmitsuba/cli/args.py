@@ -64,3 +64,9 @@ def output_file(path: str, option: str = "--out") -> str:
     if os.path.isdir(path):
         raise ConfigError(option, path, "this is a folder; give a file name ending in .png")
     return path
+
+
+def add_variant_option(parser: argparse.ArgumentParser, what: str = "Mitsuba variant") -> None:
+    """``--variant``, with the default every command shares."""
+    parser.add_argument("--variant", help=f"{what} (default: auto = cuda_ad_rgb on a GPU, else llvm_ad_rgb; "
+                                          "or $SYNMITSUBA_VARIANT)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 
-from synmitsuba.cli.args import natural_int, output_dir, positive_int
+from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, positive_int
 
 
 def run(args) -> int:
@@ -47,6 +47,6 @@ def add_parser(sub) -> None:
     p.add_argument("--denoise", choices=("none", "oidn"), default="none", help="denoise the renders' RGB with Intel "
                    "Open Image Denoise (the raw one is kept as rgb_noisy)")
     p.add_argument("--frame", type=natural_int, help="clip frame rendered (default: the middle one)")
-    p.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
+    add_variant_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

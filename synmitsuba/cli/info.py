@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import os
 
+from synmitsuba.cli.args import add_variant_option
+
 
 def run(args) -> int:
     import importlib.metadata as md
@@ -31,5 +33,5 @@ def run(args) -> int:
 def add_parser(sub) -> None:
     p = sub.add_parser("info", help="print versions, the variant and the libLLVM in use",
                        description="Print versions, the Mitsuba variant, the libLLVM and the thread count in use.")
-    p.add_argument("--variant", help="variant to report on (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
+    add_variant_option(p, "variant to report on")
     p.set_defaults(func=run)

@@ -9,7 +9,7 @@ import os
 
 import numpy as np
 
-from synmitsuba.cli.args import natural_int, output_dir, positive_float, positive_int, resolution
+from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, positive_float, positive_int, resolution
 
 
 def _figure_scene(motion, f: int, human=None):
@@ -64,6 +64,6 @@ def add_parser(sub) -> None:
     pv.add_argument("--res", type=resolution, default="200x260", help="WIDTHxHEIGHT of each frame")
     pv.add_argument("--spp", type=positive_int, default=16, help="samples per pixel")
     pv.add_argument("--seed", type=natural_int, default=0, help="seed of the subject and of a procedural clip")
-    pv.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
+    add_variant_option(pv)
     pv.add_argument("--stick", action="store_true", help="show a stick figure, not a subject")
     pv.set_defaults(func=preview)

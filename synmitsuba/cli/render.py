@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from synmitsuba.cli.args import natural_int, output_dir, positive_int, resolution
+from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, positive_int, resolution
 
 
 def run(args) -> int:
@@ -39,7 +39,7 @@ def add_parser(sub) -> None:
     p.add_argument("--spp", type=positive_int, help="samples per pixel (default: the file's render.spp)")
     p.add_argument("--res", type=resolution, help="resolution WIDTHxHEIGHT for every camera, K scaled (default: "
                    "each camera's)")
-    p.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
+    add_variant_option(p)
     p.add_argument("--seed", type=natural_int, help="render and subject seed (default: the file's render.seed)")
     p.add_argument("--denoise", choices=("none", "oidn"), help="denoise the RGB with Intel Open Image Denoise, "
                    "keeping the raw one as rgb_noisy (default: the file's render.denoise)")

@@ -8,7 +8,7 @@ import os
 
 import numpy as np
 
-from synmitsuba.cli.args import natural_int, output_dir, output_file, positive_int, resolution
+from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, output_file, positive_int, resolution
 
 # layer id -> preview colour (background, body, top, bottom, dress, shoes, hair, beard, accessory, object, ground)
 LAYER_COLOURS = np.array([[0, 0, 0], [230, 190, 160], [200, 40, 40], [40, 80, 200], [180, 60, 180], [40, 40, 40],
@@ -76,5 +76,5 @@ def add_parser(sub) -> None:
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel")
     p.add_argument("--sheet", type=natural_int, default=0, help="render this many subjects into one contact sheet "
                    "instead of a turntable")
-    p.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, or $SYNMITSUBA_VARIANT)")
+    add_variant_option(p)
     p.set_defaults(func=lambda a: sheet(a) if a.sheet else turntable(a))

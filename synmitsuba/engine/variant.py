@@ -1,7 +1,8 @@
 """Choose the Mitsuba variant once per process, safely.
 
-``set_variant()`` picks ``llvm_ad_rgb`` (CPU, differentiable) unless told otherwise (argument or
-``SYNMITSUBA_VARIANT``). For LLVM variants it first makes sure a usable libLLVM is chosen: a
+``set_variant()`` picks ``cuda_ad_rgb`` when drjit finds a CUDA GPU and ``llvm_ad_rgb`` (CPU) otherwise,
+both differentiable, unless told otherwise (argument or ``SYNMITSUBA_VARIANT``; ``auto`` is the
+default). For LLVM variants it first makes sure a usable libLLVM is chosen: a
 broken one would abort the whole process inside drjit, so we find and, if unsure, probe it.
 """
 from __future__ import annotations
@@ -12,6 +13,7 @@ from synmitsuba.errors import ConfigError, LLVMError
 from synmitsuba.engine import llvm
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
+GPU_VARIANT = "cuda_ad_rgb"
 _state: dict = {"variant": None, "threads": None}
 
 
@@ -38,14 +40,28 @@ def _threads() -> int:
     return max(1, min(n, quota) if quota else n)
 
 
-def set_variant(name: str | None = None, threads: int | None = None) -> str:
-    """Select the Mitsuba variant (default ``llvm_ad_rgb``) and drjit's thread count.
+def auto_variant() -> str:
+    """``cuda_ad_rgb`` when drjit can start its CUDA backend (a GPU and its driver), else
+    ``llvm_ad_rgb``. Renders differ in rounding between the two; each sample records its variant."""
+    import drjit as dr
+    try:
+        return GPU_VARIANT if dr.has_backend(dr.JitBackend.CUDA) else DEFAULT_VARIANT
+    except Exception:  # a broken driver is a CPU machine to us
+        return DEFAULT_VARIANT
 
-    Call before building scenes; calling again with the same name is free. ``threads`` (default:
+
+def set_variant(name: str | None = None, threads: int | None = None) -> str:
+    """Select the Mitsuba variant (default ``auto``: see ``auto_variant``) and drjit's thread count.
+
+    Call before building scenes; calling again with the same name is free (``auto`` too). ``threads`` (default:
     the CPUs this process may use, or ``SYNMITSUBA_THREADS``) only applies before the first
     scene is loaded, as Embree fixes its builder threads then.
     """
-    name = name or os.environ.get("SYNMITSUBA_VARIANT") or DEFAULT_VARIANT
+    name = name or os.environ.get("SYNMITSUBA_VARIANT") or "auto"
+    if name == "auto":
+        if _state["variant"]:
+            return _state["variant"]
+        name = auto_variant()
     if _state["variant"] == name:
         return name
     if name.startswith("llvm"):
@@ -53,7 +69,7 @@ def set_variant(name: str | None = None, threads: int | None = None) -> str:
     import drjit as dr
     import mitsuba as mi
     if name not in mi.variants():
-        raise ConfigError("variant", name, f"use one of: {', '.join(mi.variants())}")
+        raise ConfigError("variant", name, f"use auto or one of: {', '.join(mi.variants())}")
     if _state["variant"] is None:
         n = threads or _threads()
         dr.set_thread_count(n)
