@@ -32,6 +32,7 @@ def run_sequence(config: dict, index: int, out: str) -> dict:
     """Compose, render and write sequence ``index`` (a task; ``config`` as a plain dict so it
     crosses process boundaries). Returns the sequence's manifest entry."""
     from synmitsuba.compose.composition import compose_scene
+    from synmitsuba.engine.build import release_memory
     from synmitsuba.io.exr import write_sample
     from synmitsuba.pipeline import render_sequence
     cfg = GenerateConfig.from_dict(config, "")
@@ -48,12 +49,16 @@ def run_sequence(config: dict, index: int, out: str) -> dict:
     render_seed = int(np.random.SeedSequence([cfg.seed, index, 1]).generate_state(1)[0] % 2 ** 30)
     stems = []
     r = cfg.render
-    for f, view, sample in render_sequence(spec, frames=frames, spp=r.spp, seed=render_seed, annotate=cfg.annotate,
-                                           max_depth=r.max_depth, sampler=r.sampler, denoise=r.denoise):
-        sample.meta.update(sequence=index)
-        stem = f"f{f:04d}_{view}"
-        write_sample(sample, os.path.join(partial, stem))
-        stems.append(stem)
+    try:
+        for f, view, sample in render_sequence(spec, frames=frames, spp=r.spp, seed=render_seed,
+                                               annotate=cfg.annotate, max_depth=r.max_depth, sampler=r.sampler,
+                                               denoise=r.denoise):
+            sample.meta.update(sequence=index)
+            stem = f"f{f:04d}_{view}"
+            write_sample(sample, os.path.join(partial, stem))
+            stems.append(stem)
+    finally:
+        release_memory()  # this sequence's kernels and buffers: the next one has other BSDFs
     shutil.rmtree(final, ignore_errors=True)
     os.replace(partial, final)
     import resource
