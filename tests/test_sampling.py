@@ -87,3 +87,27 @@ def test_animation_compiles_no_render_kernel_after_the_second_frame(sm):
     assert len(big) >= 4  # path tracer, exact passes, coverage, ... ran in these two frames
     assert all(k["cache_hit"] for k in big), \
         [(k["hash"][:8], k["operation_count"]) for k in big if not k["cache_hit"]]
+
+
+def test_another_camera_compiles_no_render_kernel(sm):
+    """Cameras are values, not literals, in every kernel: a sequence's second view (or the next
+    sequence's cameras) reuses the path tracer, exact passes and coverage compiled for the first."""
+    import gc
+
+    import drjit as dr
+    scene, _ = _scene(sm)
+    cams = [sm.Camera.look_at(eye=eye, target=(0, 0.3, 0), fov_y_deg=40, width=40, height=30)
+            for eye in ((0.3, 1.2, 3.0), (-2.0, 0.8, 2.2), (1.0, 2.5, -2.0))]
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        gc.collect()  # only this scene's objects are live (see the animation test below)
+        sm.render(scene, cams[0], spp=4, seed=0)
+        dr.kernel_history()  # reading clears it
+        for cam in cams[1:]:
+            sm.render(scene, cam, spp=4, seed=0)
+        history = [k for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    big = [k for k in history if k["operation_count"] >= 100]
+    assert len(big) >= 6  # path tracer, exact passes and coverage for each of the two cameras
+    assert all(k["cache_hit"] for k in big), [(k["hash"][:8], k["operation_count"]) for k in big if not k["cache_hit"]]

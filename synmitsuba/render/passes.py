@@ -110,9 +110,9 @@ def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None):
         rng = mi.PCG32(size=H * W * per_pixel, initstate=mi.UInt64(idx), initseq=dr.opaque(mi.UInt64, seed))
         ox = (mi.Float(k % cols) + rng.next_float32()) / cols
         oy = (mi.Float(k // cols) + rng.next_float32()) / rows
-    M = mi.Matrix3f(camera.ray_matrix.tolist())
+    M, o = mi.Matrix3f(camera.ray_matrix.tolist()), mi.Point3f(*[float(c) for c in camera.center])
+    dr.make_opaque(M, o)  # as values, not literals: another camera reuses the compiled kernels
     d = dr.normalize(M @ mi.Vector3f(x + ox, y + oy, 1.0))
-    o = mi.Point3f(*[float(c) for c in camera.center])
     return mi.Ray3f(o, d), d
 
 
@@ -152,7 +152,9 @@ def exact_pass(name: str):
 def _depth(h: Hit):
     import drjit as dr
     import mitsuba as mi
-    return dr.select(h.hit, h.si.t * dr.dot(h.d, mi.Vector3f(*h.camera.R[2].tolist())), 0.0)
+    axis = mi.Vector3f(*h.camera.R[2].tolist())
+    dr.make_opaque(axis)
+    return dr.select(h.hit, h.si.t * dr.dot(h.d, axis), 0.0)
 
 
 @exact_pass("mask")
@@ -165,7 +167,9 @@ def _normal(h: Hit):
     import drjit as dr
     import mitsuba as mi
     n = dr.select(dr.dot(h.si.sh_frame.n, h.d) > 0, -h.si.sh_frame.n, h.si.sh_frame.n)  # face the camera
-    return dr.select(h.hit, dr.normalize(mi.Matrix3f(h.camera.R.tolist()) @ n), 0.0)
+    R = mi.Matrix3f(h.camera.R.tolist())
+    dr.make_opaque(R)
+    return dr.select(h.hit, dr.normalize(R @ n), 0.0)
 
 
 @exact_pass("position")
