@@ -33,6 +33,24 @@ def test_exr_round_trip_is_bit_exact(sm, tmp_path):
     assert not list(tmp_path.glob("*.tmp*"))
 
 
+def test_exr_bytes_do_not_depend_on_the_thread_count(sm, tmp_path, monkeypatch):
+    """write_sample compresses EXR blocks on drjit's thread count; the file must not change."""
+    import OpenEXR
+
+    from synmitsuba.engine import variant
+    s = small_sample(sm)
+    big = sm.Sample(camera=sm.Camera(K=s.camera.K, R=s.camera.R, t=s.camera.t, width=30, height=200),
+                    passes={k: np.concatenate([v] * 10, axis=0) for k, v in s.passes.items()},
+                    coverage={k: np.concatenate([v] * 10, axis=0) for k, v in s.coverage.items()}, meta=s.meta)
+    files = []
+    for n in (1, 3):
+        monkeypatch.setitem(variant._state, "threads", n)
+        sm.write_sample(big, tmp_path / f"t{n}", preview=False)
+        assert OpenEXR.global_thread_count() == n
+        files.append((tmp_path / f"t{n}.exr").read_bytes())
+    assert files[0] == files[1] and len(files[0]) > 1000
+
+
 def test_exr_has_named_channels_and_camera_header(sm, tmp_path):
     import OpenEXR
     sm.write_sample(small_sample(sm), tmp_path / "x")

@@ -86,6 +86,15 @@ def _sidecar(sample: Sample) -> dict:
             "subjects": [_plain({k: v for k, v in r.items() if k != "amodal_mask"}) for r in sample.subjects]}
 
 
+def _use_threads(OpenEXR) -> None:
+    """Compress EXR blocks on as many threads as drjit renders with (the process's share of the
+    machine): the bytes are the same for any count, as each block is compressed on its own."""
+    from synmitsuba.engine.variant import thread_count
+    n = thread_count() or os.cpu_count() or 1
+    if OpenEXR.global_thread_count() != n:
+        OpenEXR.set_global_thread_count(n)
+
+
 def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, str]:
     """Write ``<stem>.exr``, ``<stem>.json`` and (``preview``) ``<stem>.png``; returns the paths."""
     import OpenEXR
@@ -95,10 +104,11 @@ def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, s
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "synmitsuba": json.dumps(side)}
     paths = {"exr": f"{stem}.exr", "json": f"{stem}.json"}
+    _use_threads(OpenEXR)
     with atomic_path(paths["exr"]) as tmp, OpenEXR.File(header, _channels(sample)) as f:
         f.write(tmp)
-    if preview:
-        paths["png"] = write_png(f"{stem}.png", to_srgb8(sample.rgb))
+    if preview:  # a preview: fast zlib level (written once per sample, on the render's critical path)
+        paths["png"] = write_png(f"{stem}.png", to_srgb8(sample.rgb), compress_level=1)
     with atomic_path(paths["json"]) as tmp, open(tmp, "w") as fh:  # written last: it marks the sample done
         json.dump(side, fh, indent=1)
     return paths
