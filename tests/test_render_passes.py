@@ -205,3 +205,32 @@ def test_per_instance_coverage_is_a_soft_mask_consistent_with_ids(sm):
         assert inner.sum() > 0.6 * (s.instance == inst).sum()
     # the boxes overlap in x: where box 8 (nearer) covers a pixel fully, box 3 covers none of it
     assert (s.coverage[3][s.coverage[8] == 1.0] == 0).all()
+
+
+def test_coverage_cast_at_edges_equals_coverage_cast_everywhere(sm):
+    """sm.render casts coverage rays only where a pixel's 3x3 neighbourhood sees more than one
+    instance; on straight and gently curved edges that is every fractional pixel, so the result
+    equals casting at every pixel (the same rays per pixel), at a fraction of the rays."""
+    from synmitsuba.engine.build import build
+    from synmitsuba.render.passes import coverage, edge_pixels, exact_passes
+    scene = sm.Scene()
+    for k, inst in enumerate((3, 8)):
+        box = trimesh.creation.box((0.6, 0.6, 0.1))
+        box.apply_transform(trimesh.transformations.rotation_matrix(0.3 * (k + 1), [0, 0, 1]))
+        scene.add_mesh(f"b{k}", box.vertices + [-0.35 + 0.7 * k, 0, 0.1 * k], box.faces, instance=inst)
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.3)
+    scene.add_mesh("ball", ball.vertices + [0.1, -0.5, 0.3], ball.faces, instance=5)
+    cam = sm.Camera.look_at(eye=(0.2, 0.1, 3), target=(0, -0.1, 0), width=80, height=64)
+    built = build(scene)
+    exact = exact_passes(built, cam)
+    a_edges, c_edges = coverage(built, cam, 9, 4, exact=exact)
+    a_all, c_all = coverage(built, cam, 9, 4)
+    assert np.array_equal(a_edges, a_all)
+    assert sorted(c_edges) == sorted(c_all) == [3, 5, 8]
+    for i in c_all:
+        assert np.array_equal(c_edges[i], c_all[i]), i
+    fractional = (a_all > 0) & (a_all < 1)
+    cast = edge_pixels(exact["instance"], exact["mask"], np.zeros_like(exact["mask"]))
+    assert fractional.sum() > 50 and len(cast) < 0.3 * a_all.size
+    s = sm.render(scene, cam, spp=1, seed=4)
+    assert np.array_equal(s.alpha, a_all)

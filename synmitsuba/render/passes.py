@@ -24,6 +24,7 @@ from synmitsuba.render.denoise import choose_sampler, guides, oidn
 from synmitsuba.engine.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
+from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.scene import Scene
 from synmitsuba.schema import POSITIVE, Choice, Number
 
@@ -72,7 +73,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
         extra["rgb_noisy"], rgb = rgb, oidn(rgb, *guides(built.mi_scene, sensor_dict, seed))
     t2 = time.perf_counter()
     passes = exact_passes(built, camera)
-    passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed)
+    passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed, exact=passes)
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
             "variant": variant, "rfilter": rfilter, "sampler": chosen, "denoise": denoise}
@@ -92,22 +93,30 @@ def strata(n: int) -> tuple[int, int]:
     return rows, n // rows
 
 
-def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None):
+def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None, pixels: np.ndarray | None = None):
     """World rays built inside drjit: ``per_pixel`` rays per pixel, through the pixel centre
-    (``seed`` None) or one jittered ray in each of ``strata(per_pixel)`` strata (seeded PCG32).
-    Returns (ray, unit directions)."""
+    (``seed`` None) or one jittered ray in each of ``strata(per_pixel)`` strata (seeded PCG32),
+    for every pixel or for the flat indices ``pixels``. A pixel's rays do not depend on which
+    other pixels are cast. Returns (ray, unit directions)."""
     import drjit as dr
     import mitsuba as mi
     H, W = camera.height, camera.width
-    idx = dr.arange(mi.UInt32, H * W * per_pixel)
+    n = H * W if pixels is None else len(pixels)
+    idx = dr.arange(mi.UInt32, n * per_pixel)
     pixel, k = idx // per_pixel, idx % per_pixel
+    if pixels is not None:
+        pixel = dr.gather(mi.UInt32, mi.UInt32(np.asarray(pixels, np.uint32)), pixel)
     x, y = mi.Float(pixel % W), mi.Float(pixel // W)
     if seed is None:
         ox = oy = mi.Float(0.5)
     else:
         rows, cols = strata(per_pixel)
-        # the seed is opaque: a new seed (every frame of a sequence) reuses the compiled kernel
-        rng = mi.PCG32(size=H * W * per_pixel, initstate=mi.UInt64(idx), initseq=dr.opaque(mi.UInt64, seed))
+        # the seed is opaque: a new seed (every frame of a sequence) reuses the compiled kernel.
+        # PCG32 adds each lane's index to both inputs; taking it off again makes a ray's stream
+        # depend on its pixel and stratum alone, whichever pixels are cast
+        ray_id, lane = mi.UInt64(pixel * per_pixel + k), dr.arange(mi.UInt64, n * per_pixel)
+        rng = mi.PCG32(size=n * per_pixel, initstate=2 * ray_id - lane,
+                       initseq=dr.opaque(mi.UInt64, seed) + ray_id - lane)
         ox = (mi.Float(k % cols) + rng.next_float32()) / cols
         oy = (mi.Float(k // cols) + rng.next_float32()) / rows
     M, o = mi.Matrix3f(camera.ray_matrix.tolist()), mi.Point3f(*[float(c) for c in camera.center])
@@ -220,26 +229,51 @@ def exact_passes(built, camera: Camera) -> dict:
     return {name: _to_numpy(v, PASSES[name], camera.height, camera.width) for name, v in values.items()}
 
 
-def coverage(built, camera: Camera, samples: int, seed: int) -> tuple[np.ndarray, dict]:
+def edge_pixels(instance: np.ndarray, mask: np.ndarray, thin: np.ndarray) -> np.ndarray:
+    """Flat indices of the pixels whose coverage can be fractional: their 3 x 3 neighbourhood of
+    pixel centres sees more than one (instance, hit) pair, or thin geometry (``thin``: hair).
+    A straight edge that crosses a pixel always puts one of its four neighbours' centres on the
+    other side, so elsewhere the centre ray's answer (0 or 1) is the coverage; only slivers
+    thinner than a pixel that no centre hits are missed."""
+    key = instance.astype(np.int64) * 2 + mask
+    H, W = key.shape
+    padded, thin = np.pad(key, 1, mode="edge"), np.pad(thin, 1)
+    edge = np.zeros((H, W), bool)
+    for dy in range(3):
+        for dx in range(3):
+            edge |= (padded[dy:dy + H, dx:dx + W] != key) | thin[dy:dy + H, dx:dx + W]
+    return np.flatnonzero(edge).astype(np.uint32)
+
+
+def coverage(built, camera: Camera, samples: int, seed: int, exact: dict | None = None) -> tuple[np.ndarray, dict]:
     """Soft coverage from stratified jittered sub-pixel rays: the fraction of each pixel covered
-    by any geometry (alpha), and per instance id > 0 ({id: (H, W) fraction}); reduced in drjit."""
+    by any geometry (alpha), and per instance id > 0 ({id: (H, W) fraction}); reduced in drjit.
+    With ``exact`` (this view's exact passes) rays are cast only at ``edge_pixels``: the same
+    values there, the centre ray's 0 or 1 elsewhere (a tenth of the rays on a full-body view)."""
     import drjit as dr
     import mitsuba as mi
     H, W = camera.height, camera.width
-    ray, _ = _camera_rays(camera, samples, seed=seed)
-    pi = built.mi_scene.ray_intersect_preliminary(ray)
-    valid = pi.is_valid()
-    one = mi.Float(1.0)
-    count = dr.block_sum(dr.select(valid, one, 0.0), samples)  # exact integers
     ids = built.instance_ids
-    per_instance: dict[int, np.ndarray] = {}
-    if ids:
-        inst = built.lookup("instance", dr.select(valid, dr.reinterpret_array(mi.UInt32, pi.shape), 0), valid)
-        sums = [dr.block_sum(dr.select(inst == i, one, 0.0), samples) for i in ids]
+    if exact is None:
+        pixels, alpha, full = None, np.zeros(H * W, np.float32), {i: np.zeros(H * W, np.float32) for i in ids}
+    else:
+        pixels = edge_pixels(exact["instance"], exact["mask"], exact["layer"] == int(Layer.HAIR))
+        alpha = exact["mask"].astype(np.float32).ravel()
+        full = {i: (exact["instance"] == i).astype(np.float32).ravel() for i in ids}
+    at = slice(None) if pixels is None else pixels
+    if pixels is None or len(pixels):
+        ray, _ = _camera_rays(camera, samples, seed=seed, pixels=pixels)
+        pi = built.mi_scene.ray_intersect_preliminary(ray)
+        valid = pi.is_valid()
+        one = mi.Float(1.0)
+        count = dr.block_sum(dr.select(valid, one, 0.0), samples)  # exact integers
+        sums = []
+        if ids:
+            inst = built.lookup("instance", dr.select(valid, dr.reinterpret_array(mi.UInt32, pi.shape), 0), valid)
+            sums = [dr.block_sum(dr.select(inst == i, one, 0.0), samples) for i in ids]
         dr.eval(count, *sums)
+        alpha[at] = np.array(count, dtype=np.float32) / samples
         for i, s in zip(ids, sums):
-            frac = (np.array(s, dtype=np.float32) / samples).reshape(H, W)
-            if frac.any():
-                per_instance[i] = frac
-    alpha = (np.array(count, dtype=np.float32) / samples).reshape(H, W)
-    return alpha, per_instance
+            full[i][at] = np.array(s, dtype=np.float32) / samples
+    per_instance = {i: frac.reshape(H, W) for i, frac in full.items() if frac.any()}
+    return alpha.reshape(H, W), per_instance
