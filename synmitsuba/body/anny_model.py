@@ -140,6 +140,27 @@ def _shaped(key: tuple) -> tuple[np.ndarray, np.ndarray]:
     return verts, heads
 
 
+def statures(rows: list[dict]) -> np.ndarray:
+    """Standing height (m, soles to crown, rest pose) of the anny body for each complete set of
+    phenotypes in ``rows``: one batched forward pass, not cached."""
+    import torch
+    m = load_anny()
+    J, B = len(m.bone_labels), len(rows)
+    pheno = {k: torch.tensor([float(r[k]) for r in rows], dtype=torch.float32) for k in PHENOTYPES}
+    with torch.no_grad(), contextlib.redirect_stdout(sys.stderr):
+        out = m(pose_parameters=torch.eye(4).expand(B, J, 4, 4).clone(), phenotype_kwargs=pheno)
+    z = out["rest_vertices"][..., 2].cpu().numpy().astype(np.float64)  # anny is Z up
+    return z.max(1) - z.min(1)
+
+
+def height_for_stature(phenotypes: dict, stature: float) -> float:
+    """anny's ``height`` phenotype (clipped to [0, 1]) that gives a body of the other
+    ``phenotypes`` this standing height. Stature is linear in ``height`` (anny blends a min- and
+    a max-height target), so the two ends give it exactly."""
+    low, high = statures([{**phenotypes, "height": 0.0}, {**phenotypes, "height": 1.0}])
+    return float(np.clip((stature - low) / (high - low), 0.0, 1.0))
+
+
 def anny_body(phenotypes: dict | None = None) -> BodyMesh:
     """The anny body shaped by ``phenotypes`` (each in [0, 1], default 0.5)."""
     values = {k: 0.5 for k in PHENOTYPES}
