@@ -215,6 +215,29 @@ def test_sampled_adults_have_a_real_population_stature():
     assert fixed.phenotypes["height"] == 0.9 and fixed.phenotypes["gender"] == 0.5
 
 
+@pytest.mark.parametrize("seed", [0, 3])
+def test_glasses_sit_on_the_eyes_and_the_cap_hugs_the_skull(seed):
+    """Measured against anny's eye keypoints and the body surface (signed distance from the
+    closest triangle): the rims are centred on the eyes, the frame touches nothing and floats
+    nowhere (within 5 mm of the face), the cap is outside the head but within 15 mm of it, and no
+    hair strand grows through the cap."""
+    from synmitsuba.body.accessories import under_cap
+    recipe = sm.sample_subject(np.random.default_rng(seed), {"accessories": ["glasses", "cap"],
+                                                             "hair_style": "short", "texture_size": 64})
+    h = sm.build_subject(recipe)
+    eyes = h.keypoints()[[1, 2]]
+    glasses, cap = (next(p.rest for p in h.parts if p.name == k) for k in ("glasses", "cap"))
+    front = glasses[glasses[:, 2] > glasses[:, 2].max() - 0.006]  # the rims and the bridge
+    for eye in eyes:
+        rim = front[np.abs(front[:, 0] - eye[0]) < 0.03]
+        assert abs(rim[:, 0].mean() - eye[0]) < 0.003 and abs(rim[:, 1].mean() - eye[1]) < 0.003
+    d_glasses = signed_distance(h.body.vertices, h.body.faces, glasses)
+    d_cap = signed_distance(h.body.vertices, h.body.faces, cap)
+    assert d_glasses.min() > 0.0005 and d_glasses.min() < 0.005
+    assert d_cap.min() > -0.001 and np.median(d_cap) < 0.015
+    assert len(h.hair) > 0 and not under_cap(h.head, h.hair.points[:, 0]).any()
+
+
 def test_keypoints_are_anatomical(human):
     kp = human.keypoints()
     names = human.body.keypoint_labels

@@ -35,38 +35,79 @@ def _place(mesh, R, t):
     return np.asarray(mesh.vertices) @ R.T + t, np.asarray(mesh.faces)
 
 
+def _local(head):
+    """The head frame (columns side, up, forward) and centre: local = (world - centre) @ R."""
+    return frame(head["forward"], head["up"]), head["centre"]
+
+
 def _glasses(p: AccessoryParams, body, head):
-    """Two rims, a bridge and two temples reaching back along the head."""
+    """Two rims in front of the eyes (anny's eye keypoints), a bridge, end pieces and temples
+    running back past the sides of the head to the ears; the frame's plane is where the rims
+    clear the face by 6 mm and the bridge the nose by 4 mm: it rests on the face, not in it."""
     import trimesh
-    s, c, rad = p.scale, head["centre"], head["radii"]
-    parts = []
+    R, c = _local(head)
+    face = (body.vertices[head["mask"]] - c) @ R
+    eyes, ears = (head["eyes"] - c) @ R, (head["ears"] - c) @ R
+    mid, half, r = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2, 0.022 * p.scale
+    ring_path = np.zeros(len(face), bool)  # face points under the rims' tube (the lenses are open)
     for x in (-1, 1):
-        ring = trimesh.creation.torus(0.022 * s, 0.0025, major_sections=24, minor_sections=6)
-        ring.apply_translation([x * 0.032 * s, 0, 0])
-        parts.append(ring)
-    parts.append(trimesh.creation.box([0.03 * s, 0.004, 0.004]))
+        ring_path |= np.abs(np.hypot(face[:, 0] - mid[0] - x * half, face[:, 1] - mid[1]) - r) < 0.005
+    bridge = (np.abs(face[:, 0] - mid[0]) < 0.008) & (np.abs(face[:, 1] - mid[1] - 0.004) < 0.004)
+    z = max(face[ring_path, 2].max() + 0.006, face[bridge, 2].max() + 0.004)
+    band = (np.abs(face[:, 1] - mid[1]) < 0.02) & (face[:, 2] < z) & (face[:, 2] > ears[:, 2].mean() - 0.01)
+    side = np.abs(face[band, 0] - mid[0]).max() + 0.004
+    back = ears[:, 2].mean() - 0.005
+    parts = [trimesh.creation.box([2 * (half - r) + 0.006, 0.004, 0.004])]  # the bridge
+    parts[0].apply_translation([mid[0], mid[1] + 0.004, z])
     for x in (-1, 1):
-        arm = trimesh.creation.box([0.004, 0.004, rad[2] * 1.05])
-        arm.apply_translation([x * (rad[0] + 0.004), 0, -rad[2] * 0.5])
-        parts.append(arm)
-    R = frame(head["forward"], head["up"])
-    return _place(trimesh.util.concatenate(parts), R, c + R @ [0, 0.2 * rad[1], rad[2] + 0.012])
+        ring = trimesh.creation.torus(r, 0.0025, major_sections=24, minor_sections=6)
+        ring.apply_translation([mid[0] + x * half, mid[1], z])
+        end = trimesh.creation.box([side - half - r + 0.004, 0.004, 0.004])
+        end.apply_translation([mid[0] + x * (side + half + r) / 2, mid[1], z])
+        arm = trimesh.creation.box([0.004, 0.004, z - back])
+        arm.apply_translation([mid[0] + x * side, mid[1], (z + back) / 2])
+        parts += [ring, end, arm]
+    return _place(trimesh.util.concatenate(parts), R, c)
+
+
+def under_cap(head, points: np.ndarray) -> np.ndarray:
+    """Which points lie above a cap's edge: a line 3 cm above the eyes at the front, dropping 3 cm
+    for every 10 cm towards the back (hair rooted there is hidden under a cap)."""
+    R, c = _local(head)
+    v, mid = (np.asarray(points) - c) @ R, ((head["eyes"] - c) @ R).mean(0)
+    return v[:, 1] > mid[1] + 0.03 - 0.3 * (mid[2] - v[:, 2])
 
 
 def _cap(p: AccessoryParams, body, head):
-    """A dome over the skull and a brim at the front."""
+    """A crown that follows the skull 9 mm off the scalp (loop-subdivided once) (the head's own surface above a line
+    from the brows, dropping towards the back) and a two-sided brim whose inner edge follows the
+    forehead."""
+    R, c = _local(head)
+    v = (body.vertices - c) @ R
+    front_y = ((head["eyes"] - c) @ R).mean(0)[1] + 0.03
+    crown = head["mask"] & under_cap(head, body.vertices)
+    used, f = submesh(body.faces, crown)
     import trimesh
-    c, rad = head["centre"], head["radii"]
-    dome = trimesh.creation.icosphere(3, 1.0)
-    v = dome.vertices
-    keep = v[:, 2] > -0.05  # the upper half (z up in the primitive)
-    dome = trimesh.Trimesh(v * [rad[0] + 0.012, rad[2] + 0.012, rad[1] * 0.8], dome.faces[keep[dome.faces].all(1)])
-    brim = trimesh.creation.cylinder(radius=rad[2] * 0.9, height=0.005, sections=32)
-    brim.apply_translation([0, rad[2] * 0.75, 0])
-    m = trimesh.util.concatenate([dome, brim])
-    m.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))  # z up -> y up
-    R = frame(head["forward"], head["up"])
-    return _place(m, R, c + R @ [0, 0.2 * rad[1], 0])
+    dome = trimesh.Trimesh(v[used] + vertex_normals(body.vertices, body.faces)[used] @ R * 0.009, f, process=False)
+    dome = dome.subdivide_loop(1)  # smooth: the body's head is too coarse for a shiny crown
+    dome, f = np.asarray(dome.vertices), np.asarray(dome.faces)
+    # the brim: inner edge on the head's outline at brow height, 7 cm out at the front, less at the sides
+    ring = v[head["mask"] & (np.abs(v[:, 1] - front_y) < 0.012)]
+    phi = np.radians(np.linspace(-75, 75, 31))
+    ang = np.arctan2(ring[:, 0], ring[:, 2])
+    r_in = np.array([np.hypot(ring[:, 0], ring[:, 2])[np.abs(ang - a) < np.radians(6)].max() for a in phi]) + 0.01
+    r_out = r_in + 0.07 * np.cos(phi) ** 0.7 * p.scale
+    direction = np.column_stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)])
+    y = np.array([0.0, front_y, 0.0])
+    inner, outer = r_in[:, None] * direction + y, r_out[:, None] * direction + y
+    n = len(phi)
+    verts = np.concatenate([inner, outer, inner - [0, 0.004, 0], outer - [0, 0.004, 0]])
+    quads = [(i, i + 1, n + i + 1, n + i) for i in range(n - 1)]
+    top = [(a, c_, b) for a, b, c_, d in quads] + [(a, d, c_) for a, b, c_, d in quads]
+    bottom = [(a + 2 * n, b + 2 * n, c_ + 2 * n) for a, b, c_, d in quads] + \
+             [(a + 2 * n, c_ + 2 * n, d + 2 * n) for a, b, c_, d in quads]
+    brim_f = np.array(top + bottom) + len(dome)
+    return np.concatenate([dome, verts]) @ R.T + c, np.concatenate([f, brim_f])
 
 
 def _headphones(p: AccessoryParams, body, head):
@@ -119,7 +160,8 @@ def _mask(p: AccessoryParams, body, head):
     return body.vertices[used] + n * 0.006, f
 
 
-# kind -> builder(params, rest body, head {centre, radii (right, up, forward), up, forward}) -> (V, F)
+# kind -> builder(params, rest body, head {centre, radii (right, up, forward), up, forward, mask (its body
+# vertices), eyes and ears (2, 3): left, right keypoints}) -> (V, F)
 BUILDERS = BUILDERS_BY_NAME
 BUILDERS.update(glasses=_glasses, cap=_cap, headphones=_headphones, backpack=_backpack, watch=_watch, mask=_mask)
 

@@ -93,8 +93,11 @@ class LayeredHuman:
         skull = hv[hv[:, 1] > sk.rest_positions[sk.index("head"), 1]]  # above the skull base
         lo, hi = skull.min(0), skull.max(0)
         centre = np.array([(lo[0] + hi[0]) / 2, lo[1] + 0.45 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2])
+        kp, names = body.keypoint_weights @ body.vertices, list(body.keypoint_labels)
         self.head = {"centre": centre, "up": np.array([0, 1.0, 0]), "forward": np.array([0, 0, 1.0]),
-                     "radii": (hi - lo) / 2}
+                     "radii": (hi - lo) / 2, "mask": head,
+                     "eyes": kp[[names.index("left_eye"), names.index("right_eye")]],
+                     "ears": kp[[names.index("left_ear"), names.index("right_ear")]]}
         idx = np.flatnonzero(head)
         remap = -np.ones(len(body.vertices), np.int64)
         remap[idx] = np.arange(len(idx))
@@ -116,6 +119,9 @@ class LayeredHuman:
             mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4,
                            metallic=0.0 if p.kind != "watch" else 0.8)
             self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, None, self.body.weights[near]))
+            if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
+                keep = ~acc.under_cap(self.head, self.hair.points[:, 0])
+                self.hair = Strands(self.hair.points[keep], self.hair.radius[keep], self.hair.region[keep])
 
     # -- posing ---------------------------------------------------------------------------
     @property
