@@ -188,6 +188,7 @@ def test_cli_fit_texture_round_trip_recovers_a_garment_colour(sm, tmp_path):
                                                           "hair_style": "bald", "accessories": [], "texture_size": 64})
     shirt = next(g for g in recipe.garments if g.kind == "tshirt")
     shirt.texture.pattern, shirt.texture.decal, shirt.texture.bump = "none", "none", "none"
+    shirt.texture.base_lab = [55.0, 25.0, -30.0]  # well inside the gamut: 30 steps reach it from grey
     truth = list(shirt.texture.base_lab)
     (tmp_path / "truth.json").write_text(recipe.to_json())
     targets = tmp_path / "targets"

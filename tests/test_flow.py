@@ -76,7 +76,7 @@ def test_render_sequence_writes_flow_with_hair(sm, tmp_path):
     import numpy as np
 
     from synmitsuba.compose.subjects import PlacedSubject
-    human = sm.build_subject(sm.sample_subject(np.random.default_rng(2), {"hair_style": "long", "texture_size": 64}))
+    human = sm.build_subject(sm.sample_subject(np.random.default_rng(2), {"hair_style": "long", "accessories": [], "texture_size": 64}))
     clip = sm.retarget(sm.procedural_motion("wave", np.random.default_rng(0), seconds=0.3), human.skeleton)
     from synmitsuba.annotate.flow import subjects_geometry
     p = PlacedSubject(human, clip, 0, 100, "s0")

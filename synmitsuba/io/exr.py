@@ -88,11 +88,18 @@ def _sidecar(sample: Sample) -> dict:
 
 def _use_threads(OpenEXR) -> None:
     """Compress EXR blocks on as many threads as drjit renders with (the process's share of the
-    machine): the bytes are the same for any count, as each block is compressed on its own."""
+    machine): the bytes are the same for any count, as each block is compressed on its own. The
+    pool is shut down before any fork and started again at the next write."""
     from synmitsuba.engine.variant import thread_count
     n = thread_count() or os.cpu_count() or 1
     if OpenEXR.global_thread_count() != n:
+        if not _FORK_SAFE:  # a child forked with the pool's lock held but not its threads hangs
+            os.register_at_fork(before=lambda: OpenEXR.set_global_thread_count(0))  # (DataLoader workers)
+            _FORK_SAFE.append(True)
         OpenEXR.set_global_thread_count(n)
+
+
+_FORK_SAFE: list = []  # the fork hook is registered once per process
 
 
 def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, str]:
