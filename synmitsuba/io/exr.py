@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 
 import numpy as np
 
@@ -93,13 +94,18 @@ def _use_threads(OpenEXR) -> None:
     from synmitsuba.engine.variant import thread_count
     n = thread_count() or os.cpu_count() or 1
     if OpenEXR.global_thread_count() != n:
-        if not _FORK_SAFE:  # a child forked with the pool's lock held but not its threads hangs
-            os.register_at_fork(before=lambda: OpenEXR.set_global_thread_count(0))  # (DataLoader workers)
-            _FORK_SAFE.append(True)
         OpenEXR.set_global_thread_count(n)
 
 
-_FORK_SAFE: list = []  # the fork hook is registered once per process
+def _stop_exr_pool() -> None:
+    """A child forked with the pool's lock held but not its threads hangs (DataLoader workers)."""
+    module = sys.modules.get("OpenEXR")
+    if module is not None and module.global_thread_count():
+        module.set_global_thread_count(0)
+
+
+if hasattr(os, "register_at_fork"):  # not on Windows, which does not fork
+    os.register_at_fork(before=_stop_exr_pool)
 
 
 def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, str]:
