@@ -39,11 +39,20 @@ def run(workers: int, sequences: int, out: str, executor: str = "local") -> dict
         by_pid[e["pid"]].append(e["rss_mb"])
     # growth after the first sequence (which loads the libraries, compiles kernels, fills caches)
     growth = [100 * (v[-1] / v[1] - 1) for v in by_pid.values() if len(v) > 2]
+    # each sequence has another environment and other subjects, so one sequence's RSS swings by
+    # a few % with its scene: the trend compares the medians of the first and last ten (after the first)
+    trend = [100 * (_median(v[-10:]) / _median(v[1:11]) - 1) for v in by_pid.values() if len(v) >= 21]
     return {"executor": executor, "workers": workers, "sequences": sequences, "seconds": round(seconds, 1),
             "sequences_per_hour": round(3600 * sequences / seconds, 1),
             "peak_rss_mb_per_worker": {str(e["pid"]): e["peak_rss_mb"] for e in log},
             "rss_mb_per_worker_after_sequence": {str(k): v for k, v in by_pid.items()},
-            "rss_growth_percent_second_to_last": [round(g, 1) for g in growth]}
+            "rss_growth_percent_second_to_last": [round(g, 1) for g in growth],
+            "rss_trend_percent_median_last10_vs_2_to_11": [round(g, 1) for g in trend]}
+
+
+def _median(values: list) -> float:
+    v = sorted(values)
+    return (v[len(v) // 2] + v[(len(v) - 1) // 2]) / 2
 
 
 def main(argv=None) -> int:
