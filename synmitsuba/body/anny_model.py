@@ -124,7 +124,7 @@ class BodyMesh:
 PHENOTYPE_CHECK = MapOf(Number(0.0, 1.0), keys=PHENOTYPES)
 
 
-@functools.lru_cache(maxsize=32)
+@functools.lru_cache(maxsize=8)  # a sequence's subjects: new subjects have new phenotypes, so more only grows
 def _shaped(key: tuple) -> tuple[np.ndarray, np.ndarray]:
     import torch
     m = load_anny()

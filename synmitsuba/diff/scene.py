@@ -8,16 +8,21 @@ default) and renders it with Mitsuba's ``prb`` integrator (``direct_projective``
 texture's ``VARIABLES`` once bound with ``bind_procedural``, and ``environment.radiance``
 (a constant environment) or ``environment.intensity`` (an environment map's multiplier).
 
-Not offered: the sun's direction. Mitsuba 3.9's ``prb`` differentiates an emitter only
-through its radiance at fixed directions; the sun is a small disk (``sunsky``) or a delta
-(``directional``), so moving it is a boundary effect that ``prb`` leaves out: measured against
-central differences, ``sunsky``'s ``sun_direction`` gradient is off by 66-116 % and its
-turbidity by 50 %, and a ``directional`` light's gradient is detached.
+The sun: Mitsuba 3.9's ``prb`` differentiates an emitter only through its radiance at fixed
+directions; the sun is a small disk (``sunsky``) or a delta (``directional``), so moving it is
+a boundary effect that ``prb`` leaves out (measured against central differences, ``sunsky``'s
+``sun_direction`` gradient is off by 66-116 %, and a ``directional`` light's is detached).
+``DiffScene(scene, soft_sun_deg=2)`` therefore replaces a ``SunSky`` by its baked sky plus a
+soft sun lobe in drjit (``diff.sun``), with the variables ``environment.sun_elevation`` and
+``environment.sun_azimuth`` (degrees), ``environment.sun_scale`` and ``environment.sky_scale``.
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
+from synmitsuba.diff.sun import SoftSun, check_sun
 from synmitsuba.diff.texture import VARIABLES, ProceduralTexture, Variable, as_numbers, drjit_value
 from synmitsuba.errors import ConfigError
 from synmitsuba.scene.camera import Camera
@@ -28,13 +33,18 @@ INTEGRATORS = ("prb", "direct_projective", "prb_projective")
 ENVIRONMENT = {
     "environment.radiance": Variable("rgb", 0.0, 1e4, 0.02),
     "environment.intensity": Variable("float", 0.0, 1e4, 0.02),
+    "environment.sun_elevation": Variable("float", 0.5, 90.0, 0.5),
+    "environment.sun_azimuth": Variable("float", -720.0, 720.0, 0.5),
+    "environment.sun_scale": Variable("float", 0.0, 1e4, 0.02),
+    "environment.sky_scale": Variable("float", 0.0, 1e4, 0.02),
 }
+SUN = ("environment.sun_elevation", "environment.sun_azimuth", "environment.sun_scale", "environment.sky_scale")
 
 
 class DiffScene:
     """A loaded scene whose named variables a render differentiates with respect to."""
 
-    def __init__(self, scene: Scene, integrator: str = "prb", max_depth: int = 4):
+    def __init__(self, scene: Scene, integrator: str = "prb", max_depth: int = 4, soft_sun_deg: float | None = None):
         import mitsuba as mi
         from synmitsuba.engine.build import build
         from synmitsuba.engine.variant import current_variant, set_variant
@@ -45,6 +55,11 @@ class DiffScene:
         if "_ad_" not in (current_variant() or set_variant()):
             raise ConfigError("variant", current_variant(), "gradients need an AD variant: llvm_ad_rgb or cuda_ad_rgb "
                               "(SYNMITSUBA_VARIANT)")
+        check_sun(scene.environment, soft_sun_deg)
+        self.sun = None if soft_sun_deg is None else SoftSun(scene.environment, soft_sun_deg)
+        if self.sun is not None:  # the same scene under the baked sky (the user's scene is left as it is)
+            scene = copy.copy(scene)
+            scene.environment = EnvMap(self.sun.image())
         self.scene = scene
         self.built = build(scene)
         self.params = self.built.params
@@ -89,7 +104,11 @@ class DiffScene:
 
     def _bind_environment(self, env) -> None:
         import mitsuba as mi
-        if isinstance(env, Constant):
+        if self.sun is not None:
+            start = (self.sun.elevation, self.sun.azimuth, 1.0, 1.0)
+            for name, value in zip(SUN, start):
+                self._add(name, ENVIRONMENT[name], mi.Float(value))
+        elif isinstance(env, Constant):
             self._add("environment.radiance", ENVIRONMENT["environment.radiance"], mi.Color3f(*env.radiance))
         elif isinstance(env, EnvMap):
             self._envmap = type(self.params["environment.data"])(self.params["environment.data"])
@@ -128,13 +147,15 @@ class DiffScene:
             self.params["environment.radiance.value"] = v["environment.radiance"]
         if "environment.intensity" in v:
             self.params["environment.data"] = self._envmap * v["environment.intensity"]
+        if self.sun is not None:
+            self.params["environment.data"] = self.sun.evaluate(*(v[k] for k in SUN))
         self.params.update()
 
     def _driven_keys(self) -> list:
         keys = [key for key, _ in self._textures.values()]
         if "environment.radiance" in self.variables:
             keys.append("environment.radiance.value")
-        if "environment.intensity" in self.variables:
+        if "environment.intensity" in self.variables or self.sun is not None:
             keys.append("environment.data")
         return keys
 

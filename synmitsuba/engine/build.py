@@ -74,7 +74,8 @@ def _curves(shape: CurveShape):
                              "bsdf": bsdf_dict(shape.material)})
 
 
-def _environment(env) -> dict | None:
+def environment_dict(env) -> dict | None:
+    """The Mitsuba emitter dict of a Constant, SunSky or EnvMap (None: no environment)."""
     import mitsuba as mi
     if env is None:
         return None
@@ -221,7 +222,7 @@ def build(scene: Scene) -> BuiltScene:
         d[name] = _mesh(m)
     for name, c in scene.curves.items():
         d[name] = _curves(c)
-    env = _environment(scene.environment)
+    env = environment_dict(scene.environment)
     if env is not None:
         d["environment"] = env
     for i, light in enumerate(scene.lights):
