@@ -9,6 +9,7 @@ import numpy as np
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
+from synmitsuba.body.collide import GarmentCollider, Surface, incidence
 from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
 from synmitsuba.body.hair import Strands, grow_hair, hair_material, scalp_regions_from_head
 from synmitsuba.body.lbs import bone_transforms, skin
@@ -48,6 +49,13 @@ class _Part:
     faces: np.ndarray
     uv: np.ndarray
     weights: np.ndarray
+    collider: GarmentCollider | None = None  # garments: pushed out of the posed body each frame
+    inner: bool = False                      # garments other layers are pushed out of (not shoes)
+
+
+def body_margin(offset: float) -> float:
+    """What a garment keeps from the posed body: half its rest offset, within 2-6 mm."""
+    return float(np.clip(0.5 * offset, 0.002, 0.006))
 
 
 class LayeredHuman:
@@ -67,6 +75,7 @@ class LayeredHuman:
                                             body.skeleton.rest_positions + [0, lift, 0])
         self.body: BodyMesh = body
         self.split = split_at_seams(body.faces, body.face_uv, body.uv)
+        self._incidence = incidence(body.faces, len(body.vertices))
         size = recipe.texture_size
         self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin_material(recipe.skin, anny_uv_masks(2 * size), 2 * size),
                                          body.vertices[self.split.source], self.split.faces, self.split.uv,
@@ -80,9 +89,12 @@ class LayeredHuman:
             self.garments.append(m)
             b = bind(body.vertices, body.faces, body.weights, m.vertices)
             self.parts.append(_Part(g.kind, m.layer, garment_material(g.texture, size), m.vertices, m.faces, m.uv,
-                                    b.weights))
+                                    b.weights, GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset),
+                                                               body.faces[b.triangle], b.barycentric),
+                                    g.kind != "shoes"))
         self._build_head_and_hair()
         self._build_accessories()
+        self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
 
     # -- construction ---------------------------------------------------------------------
     def _build_head_and_hair(self) -> None:
@@ -135,10 +147,14 @@ class LayeredHuman:
                 raise ConfigError("rotations", f"array{rotations.shape}", f"expected ({len(self.skeleton)}, 3, 3)")
         return bone_transforms(self.skeleton, rotations, root_translation)
 
-    def pose(self, rotations=None, root_translation=None) -> list[PosedLayer]:
-        """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,)."""
+    def pose(self, rotations=None, root_translation=None, resolve: bool = True) -> list[PosedLayer]:
+        """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,); with
+        ``resolve`` garments are pushed out of the posed body and of the garments under them
+        (``body.collide``)."""
         T = self._transforms(rotations, root_translation)
         out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest, p.weights, T), p.faces, p.uv) for p in self.parts]
+        if resolve:
+            self._resolve(out)
         if len(self.hair):
             A, b = T[0][self.head_bone], T[1][self.head_bone]
             hair = self.hair.transformed(A, b)
@@ -150,6 +166,18 @@ class LayeredHuman:
                 out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair),
                                       points=hair.points[~scalp], radius=hair.radius[~scalp]))
         return out
+
+    def _resolve(self, layers: list[PosedLayer], calibrate: bool = False) -> None:
+        """Garments (inner first) out of the posed body, then out of the garments under them."""
+        body = np.empty_like(self.body.vertices)
+        body[self.split.source] = layers[0].vertices
+        surface, inner = Surface.of(body, self.body.faces, self._incidence), []
+        for part, layer in zip(self.parts, layers):
+            if part.collider is None:
+                continue
+            layer.vertices = part.collider.resolve(layer.vertices, surface, inner, calibrate)
+            if part.inner:
+                inner.append(Surface.of(layer.vertices, layer.faces, part.collider.incidence))
 
     def keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
         """COCO-17 + 6 foot keypoints (23, 3), world metres, from anny's regressor."""

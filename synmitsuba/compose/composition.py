@@ -66,7 +66,7 @@ def _subject_clip(human, source: str, seed: int, cfg: SubjectsConfig, base: str,
                                    human.skeleton), (0.0, 0.0), 0.0)
     xz, height, low = [], -np.inf, np.inf
     for f in range(motion.n_frames):
-        layers = human.pose(*motion.frame(f))
+        layers = human.pose(*motion.frame(f), resolve=False)  # a few mm do not change a hull
         pts = np.concatenate([(lay.points.reshape(-1, 3) if lay.is_curves else lay.vertices) for lay in layers])
         xz.append(pts[:, [0, 2]])
         height = max(height, float(pts[:, 1].max()))
