@@ -55,10 +55,12 @@ bench: setup
 	$(PY) bench/frame_cost.py --frames 30
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
+	$(PY) bench/garment_collisions.py --subjects 20 --stride 3
 	$(PY) bench/subjects_robustness.py 200
 	$(PY) bench/compose_cost.py
 	$(PY) bench/annotate_cost.py --views 4 --frames 3
 	$(PY) bench/generate_cost.py --sequences 6
+	$(PY) bench/diff_cost.py
 
 clean:
 	rm -rf out .pytest_cache

@@ -16,7 +16,7 @@ import numpy as np
 
 from synmitsuba.body.binding import closest_points, signed_distance
 from synmitsuba.body.textures import GarmentTextureParams
-from synmitsuba.body.topology import submesh
+from synmitsuba.body.topology import clip_faces
 from synmitsuba.geometry import face_normals, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, spec
 from synmitsuba.scene.layers import Layer
@@ -30,25 +30,27 @@ GROUPS = {
 }
 
 
-# -- body regions a garment covers (keep masks over the rest body's vertices) -------------
+# -- body regions a garment covers: level-set fields over the rest body's vertices, in metres,
+# >= 0 where the garment covers. Garments are cut along the zero level (not along triangle
+# edges), so hems, cuffs and necklines follow smooth curves.
 def _top(sleeve: Callable[[float], float], dress: bool = False):
     """Torso from the hem (by ``length``; a dress's bodice stops at the hips) to the neck, and
     the arms to ``sleeve(length)`` (0 shoulder .. 1 wrist)."""
     def region(g, r, v):
         y = v[:, 1]
-        torso, legs = r.group == "torso", np.isin(r.group, ["upperleg", "lowerleg"])
-        arms = np.isin(r.group, ["upperarm", "lowerarm"])
         hem = r.waist_y - (r.waist_y - (r.crotch_y - 0.12)) * (0.6 if dress else g.length)
-        keep = ((torso | legs) & (y >= hem) & (y <= r.neck_y)) | (arms & (r.arm_s <= sleeve(g.length)))
-        return keep & (y >= r.hip_y - 0.02) if dress else keep  # a dress's skirt is a flared surface
+        arms = np.isin(r.group, ["upperarm", "lowerarm", "hand"])
+        phi = np.where(arms, (sleeve(g.length) - r.arm_s) * r.arm_length, np.minimum(y - hem, r.neck_y - y))
+        return np.minimum(phi, y - (r.hip_y - 0.02)) if dress else phi  # a dress's skirt is a flared surface
     return region
 
 
 def _bottom(reach: Callable[[float], float]):
     """Below the waist, the legs to ``reach(length)`` (0 hip .. 1 ankle)."""
     def region(g, r, v):
-        torso, legs = r.group == "torso", np.isin(r.group, ["upperleg", "lowerleg"])
-        return ((torso & (v[:, 1] <= r.waist_y)) | (legs & (r.leg_s <= reach(g.length)))) & (v[:, 1] <= r.waist_y)
+        legs = np.isin(r.group, ["upperleg", "lowerleg", "foot"])
+        phi = np.where(legs, (reach(g.length) - r.leg_s) * r.leg_length, np.where(r.group == "torso", 1.0, -1.0))
+        return np.minimum(phi, r.waist_y - v[:, 1])
     return region
 
 
@@ -68,7 +70,7 @@ class GarmentKind:
     offset: float                 # base offset from the body surface, metres
     order: int
     shape: str
-    region: Callable | None       # (params, BodyRegions, vertices) -> keep mask
+    region: Callable | None       # (params, BodyRegions, vertices) -> level set (>= 0 covered); shoes: a mask
     length: tuple[float, float]   # sampled length range
     ease: tuple[float, float] = (0.0, 0.015)
     thickness: tuple[float, float] = (0.002, 0.006)
@@ -117,8 +119,10 @@ class BodyRegions:
 
     group: np.ndarray        # (V,) group name per vertex
     normals: np.ndarray
-    arm_s: np.ndarray        # (V,) 0 at the shoulder .. 1 at the wrist (arm vertices)
-    leg_s: np.ndarray        # (V,) 0 at the hip .. 1 at the ankle (leg vertices)
+    arm_s: np.ndarray        # (V,) 0 at the shoulder .. 1 at the wrist (arm and hand vertices)
+    leg_s: np.ndarray        # (V,) 0 at the hip .. 1 at the ankle (leg and foot vertices)
+    arm_length: float        # shoulder to wrist, metres
+    leg_length: float        # hip to ankle, metres
     waist_y: float
     hip_y: float
     crotch_y: float
@@ -133,16 +137,19 @@ def body_regions(body) -> BodyRegions:
     v = body.vertices
     arm_s = np.zeros(len(v))
     leg_s = np.zeros(len(v))
+    arm_len, leg_len = [], []
     for side in ("L", "R"):
         sh, wr = sk.rest_positions[sk.index(f"upperarm01.{side}")], sk.rest_positions[sk.index(f"wrist.{side}")]
         axis = wr - sh
-        arm = np.isin(group, ["upperarm", "lowerarm"]) & ((v[:, 0] > 0) == (side == "L"))
+        arm = np.isin(group, ["upperarm", "lowerarm", "hand"]) & ((v[:, 0] > 0) == (side == "L"))
         arm_s[arm] = ((v[arm] - sh) @ axis) / (axis @ axis)
         hip, ank = sk.rest_positions[sk.index(f"upperleg01.{side}")], sk.rest_positions[sk.index(f"foot.{side}")]
-        leg = np.isin(group, ["upperleg", "lowerleg"]) & ((v[:, 0] > 0) == (side == "L"))
+        leg = np.isin(group, ["upperleg", "lowerleg", "foot"]) & ((v[:, 0] > 0) == (side == "L"))
         leg_s[leg] = (hip[1] - v[leg, 1]) / (hip[1] - ank[1])
+        arm_len.append(np.linalg.norm(axis))
+        leg_len.append(hip[1] - ank[1])
     hip_y = float(sk.rest_positions[sk.index("upperleg01.L"), 1])
-    return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s,
+    return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s, float(np.mean(arm_len)), float(np.mean(leg_len)),
                        waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y,
                        crotch_y=hip_y - 0.07, neck_y=float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01)
 
@@ -212,6 +219,20 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
     return p
 
 
+def _cut_shell(body, r: BodyRegions, split, phi: np.ndarray, offset: float):
+    """The body's render mesh cut along ``phi == 0`` (``topology.clip_faces``), offset along the
+    normals: (vertices, faces, uv)."""
+    f, pairs, t = clip_faces(split.faces, phi[split.source])
+    src = split.source
+    lerp = lambda a: np.concatenate([a, (1 - t)[:, None] * a[pairs[:, 0]] + t[:, None] * a[pairs[:, 1]]])  # noqa: E731
+    p, n, uv = lerp(body.vertices[src]), lerp(r.normals[src]), lerp(split.uv)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    used = np.unique(f)
+    remap = -np.ones(len(p), np.int64)
+    remap[used] = np.arange(len(used))
+    return p[used] + n[used] * offset, remap[f], uv[used]
+
+
 @dataclass
 class GarmentMesh:
     params: GarmentParams
@@ -237,12 +258,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     elif kind.shape == "hull":
         v, f, uv = _shoes(body, r, g, offset)
     else:
-        keep = kind.region(g, r, body.vertices)
-        keep_split = keep[split.source]
-        used, f = submesh(split.faces, keep_split)
-        src = split.source[used]
-        v = body.vertices[src] + r.normals[src] * offset
-        uv = split.uv[used]
+        v, f, uv = _cut_shell(body, r, split, kind.region(g, r, body.vertices), offset)
         if kind.shape == "shell+flare":
             sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
             f = np.concatenate([f, sf + len(v)])

@@ -26,3 +26,34 @@ def submesh(faces: np.ndarray, keep_vertex: np.ndarray) -> tuple[np.ndarray, np.
     remap = -np.ones(len(keep_vertex), np.int64)
     remap[used] = np.arange(len(used))
     return used, remap[f]
+
+
+def clip_faces(faces: np.ndarray, phi: np.ndarray, snap: float = 0.02):
+    """Cut a triangle mesh along the level set ``phi == 0`` and keep ``phi >= 0``: triangles
+    crossing it are split on their edges (marching triangles), so the boundary follows the
+    smooth curve instead of the triangles' edges. Returns ``(faces, pairs, t)``: faces index the
+    original vertices, then one new vertex per cut edge, ``(1 - t) * v[pairs[:, 0]] + t *
+    v[pairs[:, 1]]``. ``t`` is kept within [snap, 1 - snap] so no sliver is left."""
+    faces = np.asarray(faces)
+    V = len(phi)
+    inside = phi[faces] >= 0
+    count = inside.sum(1)
+    out = [faces[count == 3]]
+    cut = faces[(count == 1) | (count == 2)]
+    ins = inside[(count == 1) | (count == 2)]
+    # rotate each cut face so that its odd vertex (alone on its side) comes first
+    odd = np.where(ins.sum(1) == 1, np.argmax(ins, 1), np.argmin(ins, 1))
+    rot = np.stack([cut[np.arange(len(cut)), (odd + k) % 3] for k in range(3)], 1)
+    a, b, c = rot.T
+    edges = np.concatenate([np.stack([a, b], 1), np.stack([c, a], 1)])
+    key = np.sort(edges, 1)
+    pairs, index = np.unique(key, axis=0, return_inverse=True)
+    index = index.ravel()
+    p_ab, p_ca = V + index[:len(a)], V + index[len(a):]
+    one = ins.sum(1) == 1  # the odd vertex is the one kept
+    out.append(np.stack([a, p_ab, p_ca], 1)[one])
+    two = ~one
+    out += [np.stack([p_ab, b, c], 1)[two], np.stack([p_ab, c, p_ca], 1)[two]]
+    fa, fb = phi[pairs[:, 0]], phi[pairs[:, 1]]
+    t = np.clip(fa / (fa - fb), snap, 1 - snap)
+    return np.concatenate(out), pairs, t
