@@ -30,13 +30,16 @@ def test_camera_frame_body_parameters_reproduce_camera_vertices(sm, walker):
     from synmitsuba.annotate import body_params_in_camera
     cam = sm.Camera.look_at(eye=(2.0, 1.5, 3.0), target=(0, 0.9, 0), width=64, height=64)
     rot, root = walker.motion.frame(3)
-    world = walker.human.pose(rot, root)
     rot_c, root_c = body_params_in_camera(walker.human.skeleton, rot, root, cam)
     rot_c = Rotation.from_rotvec(Rotation.from_matrix(rot_c).as_rotvec()).as_matrix()  # as stored: axis-angle
-    camera_frame = walker.human.pose(rot_c, root_c)
-    for a, b in zip(world, camera_frame):
-        if not a.is_curves:
-            assert np.abs(a.vertices @ cam.R.T + cam.t - b.vertices).max() < 1e-5
+    for resolve, tol in ((False, 1e-5), (True, 1e-4)):
+        # skinning is exact; the garments' collision pass picks nearest vertices, which a rigid
+        # move can swap for a neighbour when two are equally near (pushes then differ by < 0.1 mm)
+        world = walker.human.pose(rot, root, resolve=resolve)
+        camera_frame = walker.human.pose(rot_c, root_c, resolve=resolve)
+        for a, b in zip(world, camera_frame):
+            if not a.is_curves:
+                assert np.abs(a.vertices @ cam.R.T + cam.t - b.vertices).max() < (1e-5 if a.name == "body" else tol)
 
 
 def test_visibility_classes_in_hand_built_scenes(sm, walker):

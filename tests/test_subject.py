@@ -130,6 +130,15 @@ def test_posing_pushes_garments_out_of_the_body_under_motion(human):
             np.testing.assert_array_equal(a.vertices, b.vertices)
 
 
+def _openings(vertices, faces) -> np.ndarray:
+    """The edges (E, 2) of openings, in vertices merged by position (so UV seams are not
+    openings), and the merged index of every vertex."""
+    _, inv = np.unique(np.round(vertices, 6), axis=0, return_inverse=True)
+    f = inv.ravel()[faces]
+    edges, counts = np.unique(np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), 1), axis=0, return_counts=True)
+    return edges[counts == 1], inv.ravel()
+
+
 def _boundary_turning(vertices, faces) -> list[float]:
     """Per boundary loop (vertices merged by position, so UV seams are not edges): the sum of
     |turning angles| between successive boundary edges within the surface's tangent plane, per
@@ -167,7 +176,8 @@ def _boundary_turning(vertices, faces) -> list[float]:
 
 def test_garment_edges_follow_smooth_curves():
     """Hems, cuffs and necklines are cut along their region's level set: their loops turn less
-    than half as much per metre as the same regions cut along the body's triangle edges."""
+    than half as much per metre as the same regions cut along the body's triangle edges; each
+    opening is turned in by the cloth's thickness (its edge lies that much nearer the body)."""
     from synmitsuba.body.garments import GARMENTS
     cut, edge = [], []
     for seed in range(4):
@@ -176,7 +186,13 @@ def test_garment_edges_follow_smooth_curves():
             kind = GARMENTS[g.params.kind]
             if kind.shape != "shell":
                 continue
-            cut += _boundary_turning(g.vertices, g.faces)
+            rims, merged = _openings(g.vertices, g.faces)
+            shell = g.faces[:len(g.faces) - 2 * len(rims)]  # the turned-in band: two triangles per rim edge
+            cut += _boundary_turning(g.vertices, shell)
+            d = signed_distance(h.body.vertices, h.body.faces, g.vertices)
+            rim = np.isin(merged, rims)
+            assert len(_openings(g.vertices, shell)[0]) == len(rims)
+            assert np.median(d[~rim]) - np.median(d[rim]) == pytest.approx(g.params.thickness, abs=0.0015)
             phi = kind.region(g.params, h.regions, h.body.vertices)[h.split.source]
             faces = h.split.faces[(phi[h.split.faces] >= 0).all(1)]
             src = h.split.source

@@ -263,5 +263,31 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
             sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
             f = np.concatenate([f, sf + len(v)])
             v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
+    if kind.shape != "hull":
+        v, f, uv = _hem(body, v, f, uv, g.thickness)
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset)
+
+
+def _hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
+    """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
+    thickness) deep towards the closest body point, so an edge seen in a close-up has thickness.
+    Openings are found with vertices merged by position (UV seams split the mesh but are not
+    openings)."""
+    _, first, merged = np.unique(np.round(v, 7), axis=0, return_index=True, return_inverse=True)
+    merged = merged.ravel()
+    directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    m = np.sort(merged[directed], 1)
+    _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
+    edge = directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]  # a -> b as its face winds it
+    if not len(edge):
+        return v, f, uv
+    ends = np.unique(edge)
+    closest = closest_points(body.vertices, body.faces, v[ends])[0]
+    towards = (v[ends] - closest) / np.maximum(np.linalg.norm(v[ends] - closest, axis=1, keepdims=True), 1e-9)
+    inner = -np.ones(len(v), np.int64)
+    inner[ends] = len(v) + np.arange(len(ends))
+    a, b = edge.T
+    band = np.concatenate([np.stack([b, a, inner[a]], 1), np.stack([b, inner[a], inner[b]], 1)])
+    return (np.concatenate([v, v[ends] - towards * depth]), np.concatenate([f, band]),
+            np.concatenate([uv, uv[ends]]))
