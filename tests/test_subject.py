@@ -337,6 +337,32 @@ def test_glasses_sit_on_the_eyes_and_the_cap_hugs_the_skull(seed):
     assert len(h.hair) > 0 and not under_cap(h.head, h.hair.points[:, 0]).any()
 
 
+@pytest.mark.parametrize("seed", [0, 3])
+def test_mask_covers_nose_and_mouth_and_headphones_sit_on_the_ears(seed):
+    """Against anny's keypoints: the mask spans the nose keypoint's height, stays below the
+    eyes and reaches well below the nose (the mouth), off the skin; the headphones' cups are on
+    the ears and the band passes over the crown, not in front of the face."""
+    recipe = sm.sample_subject(np.random.default_rng(seed), {"accessories": ["mask", "headphones"],
+                                                             "hair_style": "bald", "texture_size": 64})
+    h = sm.build_subject(recipe)
+    kp = h.keypoints()
+    nose, eye_y, ears = kp[0], kp[[1, 2], 1].mean(), kp[[3, 4]]
+    mask, phones = (next(p.rest for p in h.parts if p.name == k) for k in ("mask", "headphones"))
+    drop = eye_y - nose[1]
+    assert mask[:, 1].max() < eye_y - 0.3 * drop and mask[:, 1].min() < nose[1] - 1.5 * drop
+    assert mask[:, 2].max() > nose[2]  # in front of the nose tip
+    d = signed_distance(h.body.vertices, h.body.faces, mask)
+    assert (d > 0.002).mean() > 0.99 and np.median(d) > 0.004  # (the sign is ambiguous in the lips' crease)
+    for ear in ears:
+        side = phones[np.sign(phones[:, 0]) == np.sign(ear[0])]
+        cup = side[np.abs(side[:, 1] - ear[1]) < 0.03]
+        assert np.linalg.norm(cup.mean(0)[[1, 2]] - ear[[1, 2]]) < 0.03
+    top = h.body.vertices[h.head["mask"], 1].max()
+    above = phones[phones[:, 1] > top]
+    assert len(above) and np.abs(above[:, 2] - h.head["centre"][2]).max() < 0.03  # over the crown
+    assert phones[:, 2].max() < nose[2] - 0.02  # nothing in front of the face
+
+
 def test_keypoints_are_anatomical(human):
     kp = human.keypoints()
     names = human.body.keypoint_labels

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.body.textures import LAB, sample_lab_colour
-from synmitsuba.body.topology import submesh
+from synmitsuba.body.topology import cut, submesh
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import align_vectors, frame, vertex_normals
 from synmitsuba.schema import Choice, Number, Params, optional, spec
@@ -111,14 +111,15 @@ def _cap(p: AccessoryParams, body, head):
 
 
 def _headphones(p: AccessoryParams, body, head):
-    """A band arching over the head and a cup over each ear."""
+    """A band arching over the crown from ear to ear (in the head's side-up plane) and a cup
+    over each ear."""
     import trimesh
     rad = head["radii"]
-    band = trimesh.creation.torus(rad[0] + 0.02, 0.008, major_sections=32, minor_sections=8)
+    band = trimesh.creation.torus(rad[0] + 0.02, 0.008, major_sections=32, minor_sections=8)  # in the xy plane
     v = band.vertices
     band = trimesh.Trimesh(v, band.faces[(v[band.faces][..., 1] > -0.01).all(1)])  # the upper half arc
-    band.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
-    band.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 0, 1]))
+    # the crown is 1.1 radii above the head's centre (placed at 45 % of the skull's height)
+    band.apply_scale([1.0, (1.1 * rad[1] + 0.02) / (rad[0] + 0.02), 1.0])
     parts = [band]
     for x in (-1, 1):
         cup = trimesh.creation.cylinder(radius=0.035 * p.scale, height=0.025, sections=24)
@@ -151,17 +152,22 @@ def _watch(p: AccessoryParams, body, head):
 
 
 def _mask(p: AccessoryParams, body, head):
-    """The face below the nose, lifted off the skin."""
+    """Nose and mouth down to the chin: the front of the face from a third of the way up from
+    anny's nose keypoint to its eyes, down to the chin (1.9 times that eye-to-nose drop below the
+    nose), cut along smooth curves, 6 mm off the skin."""
     rel = body.vertices - head["centre"]
     fwd, up, rad = head["forward"], head["up"], head["radii"]
-    sel = ((rel @ fwd) > 0.3 * rad[2]) & ((rel @ up) < -0.3 * rad[1]) & ((rel @ up) > -rad[1] * 1.05)
-    used, f = submesh(body.faces, sel)
-    n = vertex_normals(body.vertices, body.faces)[used]
-    return body.vertices[used] + n * 0.006, f
+    nose, drop = (head["nose"] - head["centre"]) @ up, (head["eyes"].mean(0) - head["nose"]) @ up
+    h = rel @ up
+    phi = np.minimum.reduce([nose + 0.35 * drop - h, h - (nose - 1.9 * drop), rel @ fwd - 0.3 * rad[2]])
+    from synmitsuba.body.garments import push_out
+    f, v, n = cut(body.faces, phi, body.vertices, vertex_normals(body.vertices, body.faces))
+    # the lips' crease and the mouth's inside are concave: what lands in the head comes out
+    return push_out(body, v + n / np.linalg.norm(n, axis=1, keepdims=True) * 0.006, clearance=0.003), f
 
 
 # kind -> builder(params, rest body, head {centre, radii (right, up, forward), up, forward, mask (its body
-# vertices), eyes and ears (2, 3): left, right keypoints}) -> (V, F)
+# vertices), eyes and ears (2, 3): left, right keypoints; nose (3,)}) -> (V, F)
 BUILDERS = BUILDERS_BY_NAME
 BUILDERS.update(glasses=_glasses, cap=_cap, headphones=_headphones, backpack=_backpack, watch=_watch, mask=_mask)
 

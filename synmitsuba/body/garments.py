@@ -16,7 +16,7 @@ import numpy as np
 
 from synmitsuba.body.binding import closest_points, signed_distance
 from synmitsuba.body.textures import GarmentTextureParams
-from synmitsuba.body.topology import clip_faces
+from synmitsuba.body.topology import cut
 from synmitsuba.geometry import face_normals, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, spec
 from synmitsuba.scene.layers import Layer
@@ -220,17 +220,11 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
 
 
 def _cut_shell(body, r: BodyRegions, split, phi: np.ndarray, offset: float):
-    """The body's render mesh cut along ``phi == 0`` (``topology.clip_faces``), offset along the
+    """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along the
     normals: (vertices, faces, uv)."""
-    f, pairs, t = clip_faces(split.faces, phi[split.source])
     src = split.source
-    lerp = lambda a: np.concatenate([a, (1 - t)[:, None] * a[pairs[:, 0]] + t[:, None] * a[pairs[:, 1]]])  # noqa: E731
-    p, n, uv = lerp(body.vertices[src]), lerp(r.normals[src]), lerp(split.uv)
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    used = np.unique(f)
-    remap = -np.ones(len(p), np.int64)
-    remap[used] = np.arange(len(used))
-    return p[used] + n[used] * offset, remap[f], uv[used]
+    f, p, n, uv = cut(split.faces, phi[src], body.vertices[src], r.normals[src], split.uv)
+    return p + n / np.linalg.norm(n, axis=1, keepdims=True) * offset, f, uv
 
 
 @dataclass

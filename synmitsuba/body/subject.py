@@ -108,7 +108,7 @@ class LayeredHuman:
         kp, names = body.keypoint_weights @ body.vertices, list(body.keypoint_labels)
         self.head = {"centre": centre, "up": np.array([0, 1.0, 0]), "forward": np.array([0, 0, 1.0]),
                      "radii": (hi - lo) / 2, "mask": head,
-                     "eyes": kp[[names.index("left_eye"), names.index("right_eye")]],
+                     "eyes": kp[[names.index("left_eye"), names.index("right_eye")]], "nose": kp[names.index("nose")],
                      "ears": kp[[names.index("left_ear"), names.index("right_ear")]]}
         idx = np.flatnonzero(head)
         remap = -np.ones(len(body.vertices), np.int64)

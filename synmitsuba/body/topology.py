@@ -57,3 +57,15 @@ def clip_faces(faces: np.ndarray, phi: np.ndarray, snap: float = 0.02):
     fa, fb = phi[pairs[:, 0]], phi[pairs[:, 1]]
     t = np.clip(fa / (fa - fb), snap, 1 - snap)
     return np.concatenate(out), pairs, t
+
+
+def cut(faces: np.ndarray, phi: np.ndarray, *attributes: np.ndarray):
+    """``clip_faces`` with per-vertex ``attributes`` (positions, normals, uv, ...) interpolated
+    onto the cut and every array compacted to the vertices kept: (faces, attribute, ...)."""
+    f, pairs, t = clip_faces(faces, phi)
+    used = np.unique(f)
+    remap = -np.ones(len(phi) + len(pairs), np.int64)
+    remap[used] = np.arange(len(used))
+    out = [np.concatenate([a, (1 - t)[:, None] * a[pairs[:, 0]] + t[:, None] * a[pairs[:, 1]]])[used]
+           for a in attributes]
+    return (remap[f], *out)
