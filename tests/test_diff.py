@@ -167,6 +167,7 @@ def test_soft_sun_lights_as_mitsubas_sun_and_its_lobe_holds_the_irradiance(sm):
     np.testing.assert_allclose(soft.mean((0, 1)), sharp.mean((0, 1)), rtol=0.01)
 
 
+@pytest.mark.slow  # 100 s on 2 cores; make test keeps the lobe's physics and the sun fit
 def test_sun_direction_and_scales_get_gradients_that_match_central_differences(sm):
     """Elevation, azimuth, sun and sky scale of the soft sun: AD (prb) within 5 % of central
     differences of the same image loss (8 seeds at 1024 spp: moving the sun also moves the
