@@ -240,6 +240,14 @@ def test_ground_reaches_the_horizon(sm):
     assert (s.instance[40:] == 1).all() and (s.instance[:24] == 0).all()  # ground below, sky above
 
 
+def test_preview_stage_ground_reaches_the_horizon(sm):
+    """The stage behind subject sheets and motion previews: ground up to the sky, no black band."""
+    from synmitsuba.compose.stage import preview_stage
+    cam = sm.Camera.look_at(eye=(0, 1.6, 0), target=(0, 1.6, -10), fov_y_deg=20, width=64, height=64)
+    s = sm.render(preview_stage(), cam, spp=4)
+    assert s.rgb.mean(-1).min() > 0.02, np.argwhere(s.rgb.mean(-1) <= 0.02)[:3]
+
+
 def test_configuration_errors_name_the_key(sm, tmp_path):
     from synmitsuba.compose.composition import load_compose_config
     rng = np.random.default_rng(0)

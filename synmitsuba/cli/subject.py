@@ -1,6 +1,7 @@
 """``synmitsuba subject --seed N --out DIR``: a turntable of one sampled subject (PNG views, EXR
 samples with every pass, the recipe JSON, a contact image); ``--sheet K`` instead renders K
-random subjects into one contact sheet."""
+random subjects into one contact sheet (``--closeup``: head and shoulders, as HMR crops and
+human NeRF views see them)."""
 from __future__ import annotations
 
 import json
@@ -22,6 +23,18 @@ def _camera(human, angle_deg: float, w: int, h: int):
     dist = 1.15 * top / np.tan(np.radians(35) / 2) / 2 + 0.3
     eye = (dist * np.sin(a), 0.55 * top + 0.25, dist * np.cos(a))
     return Camera.look_at(eye=eye, target=(0, 0.5 * top, 0), fov_y_deg=35, width=w, height=h)
+
+
+def _closeup_camera(human, w: int, h: int):
+    """Head and shoulders from the front right, framed on anny's face and shoulder keypoints."""
+    from synmitsuba.scene.camera import Camera
+    kp = human.keypoints()
+    face, shoulders = kp[:5].mean(0), kp[5:7].mean(0)
+    target = face + 0.35 * (shoulders - face)
+    a = np.radians(25.0)
+    dist = 0.8 * np.linalg.norm(kp[5] - kp[6]) / np.tan(np.radians(35) / 2)
+    return Camera.look_at(eye=tuple(target + dist * np.array([np.sin(a), 0.08, np.cos(a)])), target=tuple(target),
+                          fov_y_deg=35, width=w, height=h)
 
 
 def _subject_in_stage(seed: int):
@@ -60,8 +73,9 @@ def sheet(args) -> int:
     images = []
     for k in range(args.sheet):
         _, human, scene = _subject_in_stage(args.seed + k)
-        images.append(sm.to_srgb8(sm.render(scene, _camera(human, 25.0, *args.res), spp=args.spp, seed=k).rgb))
-    print(sm.write_png(path, sm.contact_sheet(images, columns=min(8, args.sheet))))
+        cam = _closeup_camera(human, *args.res) if args.closeup else _camera(human, 25.0, *args.res)
+        images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
+    print(sm.write_png(path, sm.contact_sheet(images, columns=min(6 if args.closeup else 8, args.sheet))))
     return 0
 
 
@@ -76,5 +90,7 @@ def add_parser(sub) -> None:
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel")
     p.add_argument("--sheet", type=natural_int, default=0, help="render this many subjects into one contact sheet "
                    "instead of a turntable")
+    p.add_argument("--closeup", action="store_true", help="with --sheet: head and shoulders (default: the whole "
+                   "body; docs/closeups.png is --sheet 12 --closeup --res 512x512 --spp 64)")
     add_variant_option(p)
     p.set_defaults(func=lambda a: sheet(a) if a.sheet else turntable(a))

@@ -9,8 +9,10 @@ from synmitsuba.scene.scene import Scene
 
 
 def preview_stage(sun_direction=(0.5, 0.9, 0.7), ground: float = 0.45, sky_scale: float = 1.5,
-                  half_size: float = 50.0) -> Scene:
-    """A scene holding only a ground square (``2 * half_size`` metres wide) and a sun and sky."""
+                  half_size: float = 20000.0) -> Scene:
+    """A scene holding only a ground square (``2 * half_size`` metres wide: its edge lies within
+    0.01 degrees of the horizon from a standing eye, so no black band shows there) and a sun and
+    sky."""
     scene = Scene()
     s = half_size
     quad = np.array([[-s, 0, -s], [s, 0, -s], [s, 0, s], [-s, 0, s]], float)
