@@ -81,9 +81,8 @@ class GarmentCollider:
     def __init__(self, faces: np.ndarray, n_vertices: int, margin: float, bound_vertices: np.ndarray,
                  barycentric: np.ndarray):
         self.margin = float(margin)
-        self.faces = np.asarray(faces)
-        self.spread = _spread(self.faces, n_vertices)
-        self.incidence = incidence(self.faces, n_vertices)
+        self.spread = _spread(np.asarray(faces), n_vertices)
+        self.incidence = incidence(np.asarray(faces), n_vertices)
         self.bound_vertices, self.barycentric = np.asarray(bound_vertices), np.asarray(barycentric)
 
     def resolve(self, points: np.ndarray, body: Surface, inner: list[Surface] = (), calibrate: bool = False):
@@ -93,31 +92,29 @@ class GarmentCollider:
         pass's heights, so the rest pose is left exactly as built and only what motion pushed
         in comes out."""
         out = points.copy()
-        at = np.einsum("nk,nka->na", self.barycentric, body.vertices[self.bound_vertices])
-        n = np.einsum("nk,nka->na", self.barycentric, body.normals[self.bound_vertices])
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-        passes = [((np.einsum("ij,ij->i", out - at, n), n), self.margin), (None, self.margin)]
-        passes += [(s, LAYER_MARGIN) for s in inner]
+        checks = [(lambda p: self._over_bound_point(p, body), self.margin), (body.depth, self.margin)]
+        checks += [(lambda p, s=s: s.depth(p, REACH), LAYER_MARGIN) for s in inner]
         if calibrate:
             self.floors = []
-        for k, (surface, margin) in enumerate(passes):
-            if surface is None:
-                height, normals = body.depth(out)
-            elif isinstance(surface, Surface):
-                height, normals = surface.depth(out, REACH)
-            else:
-                height, normals = surface
+        for k, (check, margin) in enumerate(checks):
+            height, normals = check(out)
             if calibrate:
                 self.floors.append(np.minimum(margin, height))
             else:
                 self._push(out, height, normals, self.floors[k])
         return out
 
+    def _over_bound_point(self, points: np.ndarray, body: Surface) -> tuple[np.ndarray, np.ndarray]:
+        """Heights over each vertex's own bound body point (posed) and the normal there."""
+        at = np.einsum("nk,nka->na", self.barycentric, body.vertices[self.bound_vertices])
+        n = np.einsum("nk,nka->na", self.barycentric, body.normals[self.bound_vertices])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        return np.einsum("ij,ij->i", points - at, n), n
+
     def _push(self, points: np.ndarray, height: np.ndarray, normals: np.ndarray, floor: np.ndarray) -> None:
         """Move points below ``floor`` (heights over their surface) up to it along ``normals``;
         a height of +inf marks a point with no surface to answer to."""
-        push = np.clip(floor - height, 0.0, None)
-        push[~np.isfinite(push)] = 0.0
+        push = np.clip(floor - height, 0.0, None)  # +inf height: no push
         if not push.any():
             return
         for _ in range(SMOOTHING):  # neighbours follow part of the way: no crease at the edge

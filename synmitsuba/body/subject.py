@@ -2,6 +2,7 @@
 linear blend skinning and exported to a scene with one instance id and a layer id per layer."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +51,7 @@ class _Part:
     uv: np.ndarray
     weights: np.ndarray
     collider: GarmentCollider | None = None  # garments: pushed out of the posed body each frame
-    inner: bool = False                      # garments other layers are pushed out of (not shoes)
+    inner: bool = False                      # a garment that a later garment is pushed out of
 
 
 def body_margin(offset: float) -> float:
@@ -90,8 +91,11 @@ class LayeredHuman:
             b = bind(body.vertices, body.faces, body.weights, m.vertices)
             self.parts.append(_Part(g.kind, m.layer, garment_material(g.texture, size), m.vertices, m.faces, m.uv,
                                     b.weights, GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset),
-                                                               body.faces[b.triangle], b.barycentric),
-                                    g.kind != "shoes"))
+                                                               body.faces[b.triangle], b.barycentric)))
+        garments = self.parts[1:]
+        for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
+            part.inner = part.name != "shoes" and any(q.name != "shoes" for q in garments[k + 1:])
+        self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
         self._build_accessories()
         self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
@@ -152,6 +156,9 @@ class LayeredHuman:
         ``resolve`` garments are pushed out of the posed body and of the garments under them
         (``body.collide``)."""
         T = self._transforms(rotations, root_translation)
+        key = (T[0].tobytes(), T[1].tobytes(), resolve)
+        if key in self._posed:  # same arrays, new records: nothing downstream writes into them
+            return [dataclasses.replace(layer) for layer in self._posed[key]]
         out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest, p.weights, T), p.faces, p.uv) for p in self.parts]
         if resolve:
             self._resolve(out)
@@ -165,7 +172,10 @@ class LayeredHuman:
             if (~scalp).any():
                 out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair),
                                       points=hair.points[~scalp], radius=hair.radius[~scalp]))
-        return out
+        if len(self._posed) >= 4:  # the current frame and its neighbours
+            self._posed.pop(next(iter(self._posed)))
+        self._posed[key] = out
+        return [dataclasses.replace(layer) for layer in out]
 
     def _resolve(self, layers: list[PosedLayer], calibrate: bool = False) -> None:
         """Garments (inner first) out of the posed body, then out of the garments under them."""
