@@ -28,9 +28,9 @@ _FROM = {
     "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry", "compose_scene",
                            "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
     "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
-    "synmitsuba.annotate": ("Annotator",),
+    "synmitsuba.annotate": ("Annotator", "fit_smplx", "SMPLXFit", "SMPLXOptions", "write_anny_model"),
     "synmitsuba.data": ("SynDataset",),
-    "synmitsuba.generate": ("GenerateConfig", "load_generate_config"),
+    "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "add_body_model_fits"),
     "synmitsuba.diff": ("DiffScene", "fit_texture", "FitResult"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}

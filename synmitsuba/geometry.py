@@ -43,6 +43,11 @@ def axis_angle_to_matrix(v) -> np.ndarray:
     return _batched(lambda x: _Rotation().from_rotvec(x).as_matrix(), v, 1, (3, 3))
 
 
+def matrix_to_axis_angle(R) -> np.ndarray:
+    """Matrices (..., 3, 3) -> rotation vectors (..., 3)."""
+    return _batched(lambda x: _Rotation().from_matrix(x).as_rotvec(), R, 2, (3,))
+
+
 def slerp_matrices(rotations: np.ndarray, times: np.ndarray) -> np.ndarray:
     """Rotations (F, ..., 3, 3) keyed at frames 0..F-1, sampled at fractional frame ``times``
     (T,) by spherical interpolation per element (scipy's ``Slerp``) -> (T, ..., 3, 3)."""

@@ -20,6 +20,7 @@ import numpy as np
 
 from synmitsuba.annotate.flow import exact_flow, geometry_copy, subjects_geometry
 from synmitsuba.annotate.records import Annotator
+from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.compose.subjects import add_subjects
@@ -93,14 +94,16 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
 
 
 def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, annotate: bool = True,
-                    **render_args):
+                    body_models: SMPLXOptions | None = None, **render_args):
     """Yield ``(frame, view name, Sample)`` for every frame (default all) and view (default
     all) of a composed scene, frame by frame; subjects move in place (vertices and hair
     curves), so no frame after the first reloads the Mitsuba scene. The sample of frame f
     is rendered with seed ``seed + f``; its meta holds the frame, view, camera motion kind
     and each subject's occlusion, in-view share and validity in that view; with ``annotate``
     its ``subjects`` hold each subject's labels (``synmitsuba.annotate``: keypoints and their
-    visibility, amodal mask, boxes, body parameters in world and camera frames)."""
+    visibility, amodal mask, boxes, body parameters in world and camera frames; with
+    ``body_models`` enabled, SMPL-X (and SMPL) parameters fitted to each subject over these
+    frames before the first is rendered)."""
     if not isinstance(spec, SceneSpec):
         raise ConfigError("spec", type(spec).__name__, "give a SceneSpec (sm.compose_scene or SceneSpec.from_json)")
     names = [v.name for v in spec.views] if views is None else [spec.view(n).name for n in views]
@@ -109,6 +112,9 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
         if isinstance(f, bool) or not isinstance(f, (int, np.integer)) or not 0 <= f < spec.n_frames:
             raise ConfigError("frames", f, f"give frame indices in [0, {spec.n_frames - 1}]")
     scene, placed = spec.build()
+    if annotate and body_models is not None:
+        for p in placed:
+            p.fits = fit_subject(p.human, p.motion, [int(f) for f in frames], body_models)
     annotator = Annotator(placed) if annotate else None
     geometry, neighbours = _GeometryCache(placed), _Neighbours(scene, placed)
     for f in frames:

@@ -15,7 +15,14 @@ def body_params_in_camera(skeleton, rotations, root_translation, camera: Camera)
     ``R (rest + root_translation) + t``."""
     rot = np.array(rotations, dtype=np.float64)
     roots = np.flatnonzero(skeleton.parents < 0)
-    rot[roots] = camera.R @ rot[roots]
-    rest = skeleton.rest_positions[0]
-    transl = camera.R @ (rest + np.asarray(root_translation, np.float64)) + camera.t - rest
+    rot[roots], transl = root_in_camera(rot[roots], root_translation, skeleton.rest_positions[0], camera)
     return rot, transl
+
+
+def root_in_camera(root_rotation, translation, pivot, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
+    """A body's root rotation and translation seen from ``camera``, for a model that turns
+    about the rest joint ``pivot`` and then moves by ``translation`` (x -> R_root (x - pivot) +
+    pivot + translation, as SMPL, SMPL-X and our skeletons do): (R R_root, R (pivot +
+    translation) + t - pivot)."""
+    pivot = np.asarray(pivot, np.float64)
+    return camera.R @ root_rotation, camera.R @ (pivot + np.asarray(translation, np.float64)) + camera.t - pivot

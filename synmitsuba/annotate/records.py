@@ -21,6 +21,7 @@ from synmitsuba.annotate.body import BodyLayer
 from synmitsuba.annotate.bodyparams import body_params_in_camera
 from synmitsuba.annotate.keypoints import keypoint_visibility
 from synmitsuba.engine.raycast import cast
+from synmitsuba.geometry import matrix_to_axis_angle
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
 
@@ -52,9 +53,14 @@ def keypoint_box(points2d: np.ndarray, visibility: np.ndarray) -> tuple[list | N
     return [float(v) for v in (*lo, *hi)], [float(v) for v in (lo + hi) / 2], float(1.2 * (hi - lo).max() / 200)
 
 
-def _axis_angle(rotations: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-    return Rotation.from_matrix(rotations).as_rotvec()
+def body_model_params(fits: dict, frame: int, camera: Camera) -> dict:
+    """``<kind>_world`` / ``<kind>_cam`` parameters of each body-model fit (``smplx``, ``smpl``)
+    that covers ``frame``."""
+    out = {}
+    for kind, fit in fits.items():
+        if int(frame) in fit.frames:
+            out[f"{kind}_world"], out[f"{kind}_cam"] = fit.params(frame), fit.params(frame, camera)
+    return out
 
 
 class Annotator:
@@ -97,6 +103,7 @@ class Annotator:
                                *self._posed[i])
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
             rec["layer_pixels"] = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
+            rec.update(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))
             records.append(rec)
         sample.subjects = records
         sample.passes.update(self.bodies.passes(cam, sample.passes["instance"], sample.passes["depth"],
@@ -135,9 +142,9 @@ class Annotator:
                 "amodal_mask": amodal, "visible_fraction": float(visible.sum() / n_amodal) if n_amodal else 0.0,
                 "bbox_visible": mask_box(visible), "bbox_amodal": mask_box(amodal), "bbox_keypoints": box,
                 "center": centre, "scale": scale,
-                "body_params_world": {"rotations": _axis_angle(rot), "root_translation": np.asarray(root, np.float64),
+                "body_params_world": {"rotations": matrix_to_axis_angle(rot), "root_translation": np.asarray(root, np.float64),
                                       "phenotypes": phen},
-                "body_params_cam": {"rotations": _axis_angle(rot_c), "root_translation": root_c, "phenotypes": phen},
+                "body_params_cam": {"rotations": matrix_to_axis_angle(rot_c), "root_translation": root_c, "phenotypes": phen},
                 "root_world": joints[0]}
 
 

@@ -126,31 +126,32 @@ PHENOTYPE_CHECK = MapOf(Number(0.0, 1.0), keys=PHENOTYPES)
 
 @functools.lru_cache(maxsize=8)  # a sequence's subjects: new subjects have new phenotypes, so more only grows
 def _shaped(key: tuple) -> tuple[np.ndarray, np.ndarray]:
-    import torch
-    m = load_anny()
-    J = len(m.bone_labels)
-    pheno = {k: torch.tensor([v], dtype=torch.float32) for k, v in key}
-    with torch.no_grad(), contextlib.redirect_stdout(sys.stderr):
-        out = m(pose_parameters=torch.eye(4).expand(1, J, 4, 4).clone(), phenotype_kwargs=pheno)
-    verts = out["rest_vertices"][0].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
-    heads = out["rest_bone_heads"][0].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
-    lift = -verts[:, 1].min()
-    verts[:, 1] += lift
-    heads[:, 1] += lift
-    return verts, heads
+    verts, heads = shaped_batch([dict(key)])
+    return verts[0], heads[0]
 
 
-def statures(rows: list[dict]) -> np.ndarray:
-    """Standing height (m, soles to crown, rest pose) of the anny body for each complete set of
-    phenotypes in ``rows``: one batched forward pass, not cached."""
+def shaped_batch(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """Rest vertices (B, V, 3) and bone heads (B, J, 3), our frame, soles on y = 0, for each
+    complete set of phenotypes in ``rows``: one batched forward pass, not cached."""
     import torch
     m = load_anny()
     J, B = len(m.bone_labels), len(rows)
     pheno = {k: torch.tensor([float(r[k]) for r in rows], dtype=torch.float32) for k in PHENOTYPES}
     with torch.no_grad(), contextlib.redirect_stdout(sys.stderr):
         out = m(pose_parameters=torch.eye(4).expand(B, J, 4, 4).clone(), phenotype_kwargs=pheno)
-    z = out["rest_vertices"][..., 2].cpu().numpy().astype(np.float64)  # anny is Z up
-    return z.max(1) - z.min(1)
+    verts = out["rest_vertices"].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
+    heads = out["rest_bone_heads"].cpu().numpy().astype(np.float64) @ Z_UP_TO_Y_UP.T
+    lift = -verts[..., 1].min(1)
+    verts[..., 1] += lift[:, None]
+    heads[..., 1] += lift[:, None]
+    return verts, heads
+
+
+def statures(rows: list[dict]) -> np.ndarray:
+    """Standing height (m, soles to crown, rest pose) of the anny body for each complete set of
+    phenotypes in ``rows``."""
+    y = shaped_batch(rows)[0][..., 1]
+    return y.max(1) - y.min(1)
 
 
 def height_for_stature(phenotypes: dict, stature: float) -> float:

@@ -123,23 +123,28 @@ class SceneSpec:
         ``humans`` (one ``LayeredHuman`` per subject, built from the same recipes) saves
         building them again."""
         if self._built is None:
-            from synmitsuba.body.subject import build_subject
-            from synmitsuba.motion.retargeting import retarget
             env = load_environment(self.environment)
             scene = Scene()
             add_environment(scene, env, self.lighting, np.random.default_rng(self.ground_seed))
-            placed = []
-            for i, s in enumerate(self.subjects):
-                human = humans[i] if humans is not None else build_subject(s.recipe)
-                m = s.motion
-                clip = clip_motion(m["source"], m["seed"], m["seconds"], m["fps"], m.get("base", ""),
-                                   f"subjects[{i}].motion")
-                motion = place_motion(retarget(clip, human.skeleton), s.position, s.yaw_deg, s.lift)
-                subject = PlacedSubject(human, motion, 0, s.instance, f"subject{i}")
+            placed = self.placed_subjects(humans)
+            for subject in placed:
                 subject.pose_in(scene, 0)
-                placed.append(subject)
             self._built = (scene, placed)
         return self._built
+
+    def placed_subjects(self, humans: list | None = None) -> list[PlacedSubject]:
+        """The subjects with their placed clips, without building a scene (labels computed
+        after the fact, e.g. body-model fits, need no renderer)."""
+        from synmitsuba.body.subject import build_subject
+        from synmitsuba.motion.retargeting import retarget
+        placed = []
+        for i, s in enumerate(self.subjects):
+            human = humans[i] if humans is not None else build_subject(s.recipe)
+            m = s.motion
+            clip = clip_motion(m["source"], m["seed"], m["seconds"], m["fps"], m.get("base", ""), f"subjects[{i}].motion")
+            motion = place_motion(retarget(clip, human.skeleton), s.position, s.yaw_deg, s.lift)
+            placed.append(PlacedSubject(human, motion, 0, s.instance, f"subject{i}"))
+        return placed
 
     @property
     def motions(self) -> list:

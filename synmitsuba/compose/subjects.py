@@ -5,7 +5,7 @@ instance: 5, config: {...}}``; every key is optional."""
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -45,6 +45,7 @@ class PlacedSubject:
     frame: int
     instance: int
     prefix: str
+    fits: dict = field(default_factory=dict)  # body-model fits by kind ("smplx", "smpl"): annotate.smplx_fit
 
     def pose_in(self, scene, frame: int | None = None) -> None:
         """Pose the subject at ``frame`` (default its own) in ``scene``, moving it in place."""

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import yaml
 
+from synmitsuba.annotate.smplx_fit import SMPLXOptions
 from synmitsuba.compose.composition import ComposeConfig
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.errors import ConfigError
@@ -31,6 +32,8 @@ class GenerateConfig(Params):
     annotate: bool = spec(True, Flag(), doc="subject labels, flow and body passes")
     render: RenderOptions = spec(factory=RenderOptions, check=Nested(RenderOptions))
     compose: ComposeConfig = spec(factory=ComposeConfig, check=Nested(ComposeConfig))
+    smplx: SMPLXOptions = spec(factory=SMPLXOptions, check=Nested(SMPLXOptions),
+                               doc="SMPL-X / SMPL fits of every subject (needs the user's model files)")
 
 
 def _override(data: dict, assignment: str) -> None:

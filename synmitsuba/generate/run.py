@@ -51,8 +51,8 @@ def run_sequence(config: dict, index: int, out: str) -> dict:
     r = cfg.render
     try:
         for f, view, sample in render_sequence(spec, frames=frames, spp=r.spp, seed=render_seed,
-                                               annotate=cfg.annotate, max_depth=r.max_depth, sampler=r.sampler,
-                                               denoise=r.denoise):
+                                               annotate=cfg.annotate, body_models=cfg.smplx, max_depth=r.max_depth,
+                                               sampler=r.sampler, denoise=r.denoise):
             sample.meta.update(sequence=index)
             stem = f"f{f:04d}_{view}"
             write_sample(sample, os.path.join(partial, stem))

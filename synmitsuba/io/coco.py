@@ -77,6 +77,29 @@ def export_coco(dataset_dir: str, out_json: str) -> dict:
     return {"images": len(images), "annotations": len(anns)}
 
 
+BODY_MODEL_KEYS = ("betas", "global_orient", "body_pose", "transl", "left_hand_pose", "right_hand_pose", "jaw_pose",
+                   "leye_pose", "reye_pose", "expression")
+
+
+def _body_model_columns(rows: list, kind: str) -> dict:
+    """``<kind>.<param>`` (camera frame, as mmhuman3d keeps them) and ``<kind>_world.<param>``
+    for every row; ``<kind>.valid`` says which rows have a fit (zeros elsewhere) and
+    ``<kind>.fit_ok`` which of those passed the fit's error threshold."""
+    first = next((r for r in rows if f"{kind}_cam" in r), None)
+    if first is None:
+        return {}
+    out = {f"{kind}.valid": np.array([f"{kind}_cam" in r for r in rows]),
+           f"{kind}.fit_ok": np.array([bool(r.get(f"{kind}_cam", {}).get("fit", {}).get("ok", False)) for r in rows]),
+           f"{kind}.gender": np.array([r.get(f"{kind}_cam", {}).get("gender", "") for r in rows])}
+    for frame_name, suffix in (("", "cam"), ("_world", "world")):
+        for key in BODY_MODEL_KEYS:
+            if key in first[f"{kind}_{suffix}"]:
+                blank = np.zeros_like(np.asarray(first[f"{kind}_{suffix}"][key], np.float64))
+                out[f"{kind}{frame_name}.{key}"] = np.stack(
+                    [np.asarray(r[f"{kind}_{suffix}"][key], np.float64) if f"{kind}_{suffix}" in r else blank for r in rows])
+    return out
+
+
 def export_humandata(dataset_dir: str, out_npz: str) -> dict:
     """One npz in the HumanData layout HMR training code reads (mmhuman3d): per valid subject
     and sample ``image_path``, ``bbox_xywh`` (N, 5; last = 1), ``center`` (N, 2), ``scale`` (N,),
@@ -85,9 +108,13 @@ def export_humandata(dataset_dir: str, out_npz: str) -> dict:
     ``visibility`` (N, 23 classes), ``anny.rotations`` (N, J, 3 axis-angle, camera frame root),
     ``anny.root_translation`` (N, 3), ``anny.rotations_world``, ``anny.root_translation_world``,
     ``anny.root_world`` (N, 3: the world root trajectory), ``cam_param.K`` / ``.R`` / ``.T``
-    (world -> camera), ``instance``, ``frame``."""
+    (world -> camera), ``instance``, ``frame``; with body-model fits, ``smplx.betas``,
+    ``smplx.global_orient``, ``smplx.body_pose``, ``smplx.transl``, hands, jaw, eyes,
+    ``smplx.expression`` (camera frame), the same under ``smplx_world.``, ``smplx.valid``,
+    ``smplx.fit_ok``, ``smplx.gender`` (and ``smpl.*``)."""
     base = os.path.dirname(os.path.abspath(out_npz))
     cols: dict = {}
+    rows: list = []
 
     def add(key, value):
         cols.setdefault(key, []).append(value)
@@ -115,7 +142,10 @@ def export_humandata(dataset_dir: str, out_npz: str) -> dict:
             add("cam_param.T", cam.t)
             add("instance", rec["instance"])
             add("frame", sample.meta.get("frame", 0))
+            rows.append(rec)
     arrays = {k: np.asarray(v) for k, v in cols.items()}
+    for kind in ("smplx", "smpl"):
+        arrays.update(_body_model_columns(rows, kind))
     n_kp = 23
     arrays["keypoints2d_mask"] = arrays["keypoints3d_mask"] = np.ones(n_kp, np.uint8)
     with atomic_path(out_npz) as tmp:

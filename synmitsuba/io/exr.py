@@ -65,6 +65,9 @@ def _record_back(rec: dict, ch: dict) -> dict:
     for k in ("body_params_world", "body_params_cam"):
         out[k] = {**rec[k], "rotations": np.asarray(rec[k]["rotations"]),
                   "root_translation": np.asarray(rec[k]["root_translation"])}
+    for k, v in rec.items():  # body-model parameters (smplx_world, smpl_cam, ...)
+        if isinstance(v, dict) and "model" in v:
+            out[k] = {name: (np.asarray(x, np.float64) if isinstance(x, list) else x) for name, x in v.items()}
     out["amodal_mask"] = ch[f"amodal.{rec['instance']}"].astype(bool)
     return out
 
@@ -125,6 +128,25 @@ def write_sample(sample: Sample, stem: str, preview: bool = True) -> dict[str, s
     with atomic_path(paths["json"]) as tmp, open(tmp, "w") as fh:  # written last: it marks the sample done
         json.dump(side, fh, indent=1)
     return paths
+
+
+def update_subjects(stem: str, update) -> None:
+    """Rewrite a written sample's subject records (EXR header and JSON sidecar) with
+    ``update(records)``, which edits the JSON-ready records in place; pixels are unchanged.
+    Both files are written under temporary names and renamed."""
+    import OpenEXR
+    stem = stem[:-4] if stem.endswith(".exr") else os.fspath(stem)
+    with OpenEXR.File(f"{stem}.exr", separate_channels=True) as f:
+        header, channels = dict(f.header()), {k: v.pixels for k, v in f.channels().items()}
+    side = json.loads(header["synmitsuba"])
+    update(side["subjects"])
+    side["subjects"] = _plain(side["subjects"])
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, "synmitsuba": json.dumps(side)}
+    _use_threads(OpenEXR)
+    with atomic_path(f"{stem}.exr") as tmp, OpenEXR.File(header, channels) as f:
+        f.write(tmp)
+    with atomic_path(f"{stem}.json") as tmp, open(tmp, "w") as fh:
+        json.dump(side, fh, indent=1)
 
 
 def read_sample(stem: str) -> Sample:

@@ -63,3 +63,21 @@ def canonical_map(names, family: str | None = None) -> dict[str, str]:
         return {}
     table = FAMILIES[family]
     return {n: table[n] for n in names if n in table}
+
+
+# SMPL / SMPL-X joints the canonical humanoid has no name for -> anny bones (anny's finger1 is
+# the thumb; SMPL's hand joint sits at the middle finger's knuckle)
+_ANNY_FINGER = {"thumb": 1, "index": 2, "middle": 3, "ring": 4, "pinky": 5}
+_ANNY_EXTRA = {f"{side}_{finger}{k}": f"finger{n}-{k}.{side[0].upper()}" for side in ("left", "right")
+               for finger, n in _ANNY_FINGER.items() for k in (1, 2, 3)}
+_ANNY_EXTRA.update({"left_eye_smplhf": "eye.L", "right_eye_smplhf": "eye.R", "left_hand": "finger3-1.L",
+                    "right_hand": "finger3-1.R"})
+
+
+def body_model_to_anny(names) -> dict[str, str]:
+    """{SMPL / SMPL-X joint name: anny bone} for every joint with a counterpart: the body through
+    the canonical names (as retargeting maps them), hands and eyes through their own table."""
+    inv_anny = {c: n for n, c in FAMILIES["anny"].items()}
+    out = {n: inv_anny[c] for n, c in canonical_map(names, "smplx").items() if c in inv_anny}
+    out.update({n: _ANNY_EXTRA[n] for n in names if n in _ANNY_EXTRA})
+    return out

@@ -32,26 +32,39 @@ def _descendant(sk: Skeleton, i: int, j: int) -> bool:
     return False
 
 
+def aligned_globals(sk: Skeleton, bones: dict[int, tuple[int, np.ndarray]]) -> np.ndarray:
+    """Global rotations (J, 3, 3) that turn each listed bone, ``{joint: (descendant joint,
+    direction)}``, onto its direction by the smallest rotation from its parent's; every other
+    joint keeps its parent's."""
+    G = np.empty((len(sk), 3, 3))
+    for i in range(len(sk)):
+        parent = G[sk.parents[i]] if sk.parents[i] >= 0 else np.eye(3)
+        G[i] = parent
+        if i in bones:
+            j, direction = bones[i]
+            d_rest = parent @ (sk.rest_positions[j] - sk.rest_positions[i])
+            if np.linalg.norm(d_rest) > 1e-9:
+                G[i] = align_vectors(d_rest, direction) @ parent
+    return G
+
+
+def bone_children(sk: Skeleton, canon: dict[str, str]) -> dict[int, int]:
+    """{joint: the descendant its bone points to} through the canonical names (``BONE_CHILD``)."""
+    inv = {c: n for n, c in canon.items()}
+    out = {}
+    for i, name in enumerate(sk.names):
+        child = BONE_CHILD.get(canon.get(name, ""))
+        if child in inv and _descendant(sk, i, sk.index(inv[child])):
+            out[i] = sk.index(inv[child])
+    return out
+
+
 def tpose_globals(sk: Skeleton, canon: dict[str, str]) -> np.ndarray:
     """Global rotations (J, 3, 3) that put ``sk`` into the canonical humanoid's T-pose."""
     ref = humanoid_skeleton()
-    inv = {c: n for n, c in canon.items()}
-    G = np.empty((len(sk), 3, 3))
-    for i, name in enumerate(sk.names):
-        parent = G[sk.parents[i]] if sk.parents[i] >= 0 else np.eye(3)
-        G[i] = parent
-        c = canon.get(name)
-        child = BONE_CHILD.get(c) if c else None
-        if child is None or child not in inv:
-            continue
-        j = sk.index(inv[child])
-        if not _descendant(sk, i, j):
-            continue
-        d_rest = parent @ (sk.rest_positions[j] - sk.rest_positions[i])
-        d_ref = ref.rest_positions[ref.index(child)] - ref.rest_positions[ref.index(c)]
-        if np.linalg.norm(d_rest) > 1e-9:
-            G[i] = align_vectors(d_rest, d_ref) @ parent
-    return G
+    bones = {i: (j, ref.rest_positions[ref.index(BONE_CHILD[canon[sk.names[i]]])] -
+                 ref.rest_positions[ref.index(canon[sk.names[i]])]) for i, j in bone_children(sk, canon).items()}
+    return aligned_globals(sk, bones)
 
 
 def pelvis_height(sk: Skeleton, root: int = 0) -> float:
