@@ -15,3 +15,23 @@ def sm():
     import synmitsuba
     synmitsuba.set_variant()
     return synmitsuba
+
+
+TINY = str(ROOT / "configs" / "tiny.yaml")
+
+
+def generate_tiny(out, *extra):
+    """``synmitsuba generate configs/tiny.yaml`` (2 frames) in a subprocess."""
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",
+                           "--set", "frames=2", *extra], capture_output=True, text=True)
+
+
+@pytest.fixture(scope="session")
+def tiny(tmp_path_factory):
+    """The tiny dataset (2 sequences, 2 frames each, one worker), shared by the tests that only read it."""
+    out = tmp_path_factory.mktemp("gen") / "one"
+    run = generate_tiny(out, "--workers", "1")
+    assert run.returncode == 0, run.stderr
+    return out

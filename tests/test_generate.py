@@ -12,7 +12,7 @@ import pytest
 
 from synmitsuba.errors import ConfigError
 
-TINY = os.path.join(os.path.dirname(__file__), "..", "configs", "tiny.yaml")
+from conftest import TINY, generate_tiny as _generate
 
 
 def _files(root) -> dict:
@@ -23,19 +23,6 @@ def _files(root) -> dict:
             path = os.path.join(folder, f)
             if f != "run.log":
                 out[os.path.relpath(path, root)] = open(path, "rb").read()
-    return out
-
-
-def _generate(out, *extra):
-    return subprocess.run([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",
-                           "--set", "frames=2", *extra], capture_output=True, text=True)
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory):
-    out = tmp_path_factory.mktemp("gen") / "one"
-    run = _generate(out, "--workers", "1")
-    assert run.returncode == 0, run.stderr
     return out
 
 

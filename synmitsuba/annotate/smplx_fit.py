@@ -30,27 +30,28 @@ from synmitsuba.body.skeleton import Skeleton, forward_kinematics
 from synmitsuba.body.smplx_model import GENDERS, ModelFile, available_genders, find_model, load_model
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import axis_angle_to_matrix, matrix_to_axis_angle, vertex_normals
-from synmitsuba.motion.names import body_model_to_anny, canonical_map
+from synmitsuba.motion.names import TORSO, body_model_to_anny, canonical_map
 from synmitsuba.motion.retargeting import aligned_globals, bone_children
 from synmitsuba.schema import POSITIVE, Choice, Flag, Number, Params, Text, optional, spec
 
 BODY_JOINTS = {"smplx": 22, "smpl": 24}  # joints the pose step refines (root and body); hands follow anny
 SIGMA_CM = 2.0                           # robust loss scale
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
-TORSO = ("pelvis", "spine1", "spine2", "chest", "neck", "head")
 
 
 @dataclass
 class FitSettings:
     """Iterations and loss weights (units: cm for distances, radians for the prior)."""
 
+    joint_iterations: int = 80
     shape_iterations: int = 150
     pose_iterations: int = 50
     chunk: int = 16
     correspond_every: int = 10
     vertex_stride: int = 2     # the iterations pose every n-th model vertex; errors use them all
     joint_weight: float = 0.5
-    prior_weight: float = 2.0
+    prior_weight: float = 2.0          # pose step: pull toward the clip's rotations
+    shape_prior_weight: float = 0.01   # shape step: the start is only a guess at the rest pose
     smooth_weight: float = 2.0
     betas_weight: float = 1e-3
 
@@ -210,6 +211,7 @@ class _Problem:
         self.faces = layer.model.faces
         self.subset = np.arange(0, len(layer.model.v_template), s.vertex_stride)
         self.subset_t = torch.as_tensor(self.subset)
+        self.surface = True  # False: joints only (the shape step's first stage)
         from scipy.spatial import cKDTree
         self.trees = [cKDTree(v) for v in targets.vertices]
 
@@ -234,18 +236,21 @@ class _Problem:
 
     def loss(self, verts, joints):
         import torch
+        jerr = 100 * (joints[:, self.joint_idx] - self.joint_targets)
+        joint_term = self.s.joint_weight * (jerr ** 2).sum(-1).mean()
+        if not self.surface:
+            return joint_term
         f = torch.arange(verts.shape[0])[:, None]
         p, n = self.A[f, self.to_a], self.NA[f, self.to_a]
         d = 100 * (verts - p)
         s2a = (self.w_a * (_gm((d * n).sum(-1)) + 0.1 * _gm(d.norm(dim=-1)))).mean()
         q = 100 * (self.A - torch.gather(verts, 1, self.to_m[..., None].expand(-1, -1, 3)))
         a2s = (self.w_m * (_gm((q * self.NM).sum(-1)) + 0.1 * _gm(q.norm(dim=-1)))).mean()
-        jerr = 100 * (joints[:, self.joint_idx] - self.joint_targets)
-        return s2a + a2s + self.s.joint_weight * (jerr ** 2).sum(-1).mean()
+        return s2a + a2s + joint_term
 
 
 def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: int, fit_betas: bool,
-         warm=None, smooth: bool = False):
+         warm=None, smooth: bool = False, prior: float = 0.0):
     """Adam on (betas), corrections to ``pose0`` at joints ``free`` and to ``transl0``; returns
     numpy (betas, pose (F, J, 3), transl (F, 3), last corrections)."""
     import torch
@@ -267,11 +272,11 @@ def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: 
     for it in range(iterations):
         pose = base.clone()
         pose[:, free_t] = base[:, free_t] + dpose
-        if it % s.correspond_every == 0:
+        if problem.surface and it % s.correspond_every == 0:
             with torch.no_grad():
                 problem.correspond(problem.layer(b, rodrigues(pose), t0 + dt)[0].numpy())
         verts, joints = problem.layer(b, rodrigues(pose), t0 + dt, problem.subset_t)
-        loss = problem.loss(verts, joints) + s.prior_weight * (dpose[:, 1:] ** 2).sum(-1).mean()
+        loss = problem.loss(verts, joints) + prior * (dpose[:, 1:] ** 2).sum(-1).mean()
         if fit_betas:
             loss = loss + s.betas_weight * (b ** 2).sum()
         if smooth and F > 1:
@@ -313,7 +318,12 @@ def fit_shape(model: ModelFile, body, n_betas: int = 10, settings: FitSettings |
     transl0 = (rest[pairs[0]] - J0)[None]
     problem = _Problem(layer, targets, idx, rest[[pairs[j] for j in idx]][None], s)
     free = list(range(BODY_JOINTS[model.kind]))
-    betas, pose, transl, _ = _run(problem, np.zeros(layer.n_betas), pose0, transl0, free, s.shape_iterations, True)
+    problem.surface = False  # joints first: they fix the torso's bend, which the surface alone lets slide
+    betas, pose, transl, _ = _run(problem, np.zeros(layer.n_betas), pose0, transl0, free, s.joint_iterations, True,
+                                  prior=s.shape_prior_weight)
+    problem.surface = True
+    betas, pose, transl, _ = _run(problem, betas, pose, transl, free, s.shape_iterations, True,
+                                  prior=s.shape_prior_weight)
     with torch.no_grad():
         verts, joints = layer(torch.as_tensor(betas, dtype=torch.float32), rodrigues(torch.as_tensor(pose, dtype=torch.float32)),
                               torch.as_tensor(transl, dtype=torch.float32))
@@ -389,7 +399,8 @@ def _fit_frames(shape: _Shape, body, clip, frames: np.ndarray, threshold_mm: flo
         targets = _anny_targets(body, clip.rotations[chunk], clip.root_translation[chunk])
         pose0, transl0, jt, J0 = _initial_pose(shape, pairs, targets, rest)
         problem = _Problem(shape.layer, targets, idx, np.stack([jt[j] for j in idx], 1), s)
-        _, pose, transl, warm = _run(problem, shape.betas, pose0, transl0, free, s.pose_iterations, False, warm, True)
+        _, pose, transl, warm = _run(problem, shape.betas, pose0, transl0, free, s.pose_iterations, False, warm, True,
+                                     s.prior_weight)
         with torch.no_grad():
             verts, joints = shape.layer(torch.as_tensor(shape.betas, dtype=torch.float32),
                                         rodrigues(torch.as_tensor(pose, dtype=torch.float32)),

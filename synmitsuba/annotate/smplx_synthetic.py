@@ -4,8 +4,9 @@ and trying the fit without the licensed files.
 The template is anny's body at the middle phenotypes; the shape basis is the principal
 components of anny bodies at random phenotypes (scaled so betas are unit variance); joints are
 the anny bones ``body_model_to_anny`` names, regressed from nearby vertices; skinning weights
-are anny's, summed onto those joints; the rest pose is anny's (so a retargeted clip's anny
-rotations are this model's pose parameters) and there are no pose correctives.
+are anny's, summed onto those joints; there are no pose correctives. The rest pose is anny's
+(a retargeted clip's anny rotations are then this model's pose parameters) or, with
+``rest="tpose"``, the canonical T-pose the published models rest in.
 """
 from __future__ import annotations
 
@@ -14,8 +15,11 @@ import os
 import numpy as np
 
 from synmitsuba.body.anny_model import PHENOTYPES, _static, shaped_batch
+from synmitsuba.body.lbs import bone_transforms, skin
+from synmitsuba.body.skeleton import Skeleton, forward_kinematics
 from synmitsuba.body.smplx_model import KINDS, SMPL_JOINT_NAMES, SMPL_PARENTS, SMPLX_JOINT_NAMES, SMPLX_PARENTS
-from synmitsuba.motion.names import body_model_to_anny
+from synmitsuba.motion.names import TORSO, body_model_to_anny, canonical_map
+from synmitsuba.motion.retargeting import tpose_globals
 
 GENDER_RANGE = {"neutral": (0.0, 1.0), "male": (0.0, 0.3), "female": (0.7, 1.0)}  # anny: 0 male, 1 female
 
@@ -72,14 +76,35 @@ def _regressor(verts: np.ndarray, joints: np.ndarray, near: int = 128) -> np.nda
     return reg
 
 
+def _tposed(verts: np.ndarray, heads: np.ndarray, st: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every sample's limbs turned into the canonical T-pose (the rotations found on the first;
+    the trunk keeps its natural bend): the rest pose of the published models. Also returns
+    those global rotations (J, 3, 3)."""
+    sk = Skeleton(st["bones"], st["parents"], heads[0])
+    G = tpose_globals(sk, {n: c for n, c in canonical_map(st["bones"]).items() if c not in TORSO})
+    local = G.copy()
+    local[st["parents"] >= 0] = np.swapaxes(G[st["parents"][st["parents"] >= 0]], -1, -2) @ G[st["parents"] >= 0]
+    out_v, out_h = np.empty_like(verts), np.empty_like(heads)
+    for i, (v, h) in enumerate(zip(verts, heads)):
+        sk_i = Skeleton(st["bones"], st["parents"], h)
+        out_v[i] = skin(v, st["weights"], bone_transforms(sk_i, local))
+        out_h[i] = forward_kinematics(sk_i, local)[1]
+    return out_v, out_h, G
+
+
 def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", n_betas: int = 16,
-                     n_samples: int = 64, seed: int = 0) -> str:
-    """Write ``<KIND>_<GENDER>.npz`` into ``folder`` and return its path."""
+                     n_samples: int = 64, seed: int = 0, rest: str = "anny") -> str:
+    """Write ``<KIND>_<GENDER>.npz`` into ``folder`` and return its path. ``rest="tpose"``
+    makes the T-pose the model's rest pose, as in the published files (``anny_rest`` then
+    holds, per model joint, the rotation of its anny bone from anny's rest pose to it)."""
     names = SMPLX_JOINT_NAMES if kind == "smplx" else SMPL_JOINT_NAMES
     parents = np.array(SMPLX_PARENTS if kind == "smplx" else SMPL_PARENTS)
     rows = [{k: 0.5 for k in PHENOTYPES}] + sample_phenotypes(np.random.default_rng(seed), n_samples, gender)
     verts, heads = shaped_batch(rows)
     st = _static()
+    G = np.broadcast_to(np.eye(3), (len(st["bones"]), 3, 3))
+    if rest == "tpose":
+        verts, heads, G = _tposed(verts, heads, st)
     diff = (verts[1:] - verts[0]).reshape(n_samples, -1)
     _, sv, vt = np.linalg.svd(diff, full_matrices=False)
     basis = (vt[:n_betas] * (sv[:n_betas, None] / np.sqrt(n_samples))).T.reshape(-1, 3, n_betas)
@@ -89,5 +114,6 @@ def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", 
     path = os.path.join(folder, f"{KINDS[kind][0]}_{gender.upper()}.npz")
     np.savez(path, v_template=verts[0], f=st["faces"], shapedirs=basis, J_regressor=_regressor(verts, joints),
              weights=_skinning(names, st["bones"], st["parents"], st["weights"].astype(np.float64)),
-             kintree_table=kintree, posedirs=np.zeros((verts.shape[1], 3, 9 * (len(names) - 1))))
+             kintree_table=kintree, posedirs=np.zeros((verts.shape[1], 3, 9 * (len(names) - 1))),
+             anny_rest=G[_joint_bones(names, st["bones"])])
     return path

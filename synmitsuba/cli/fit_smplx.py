@@ -27,7 +27,8 @@ def add_parser(sub) -> None:
                        "at the folder holding SMPLX_NEUTRAL.npz.")
     p.add_argument("dataset", help="a folder synmitsuba generate wrote")
     p.add_argument("--model-path", help="folder of SMPLX_*.npz (default: $SMPLX_MODEL_PATH)")
-    p.add_argument("--smpl", action="store_true", help="fit SMPL too (SMPL_*.npz/.pkl there or in $SMPL_MODEL_PATH)")
+    p.add_argument("--smpl", action="store_true",
+                   help="fit SMPL too (SMPL_*.npz/.pkl there or in $SMPL_MODEL_PATH; default: SMPL-X only)")
     p.add_argument("--gender", choices=("auto", "neutral", "male", "female"), default="auto",
                    help="model file; auto fits each one present and keeps the best")
     p.add_argument("--betas", type=positive_int, default=10, help="shape coefficients fitted")

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 _SIDES = {"l": ("Left", ".L", "left_"), "r": ("Right", ".R", "right_")}
 
+TORSO = ("pelvis", "spine1", "spine2", "chest", "neck", "head")  # canonical names of the trunk's joints
+
 # canonical joint -> the child its bone points to (its "direction" joint)
 BONE_CHILD = {"pelvis": "spine1", "spine1": "spine2", "spine2": "chest", "chest": "neck", "neck": "head",
               "head": "head_end"}
