@@ -56,6 +56,7 @@ bench: setup
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
 	$(PY) bench/garment_collisions.py --subjects 20 --stride 3
+	$(PY) bench/smplx_fit.py --subjects 10
 	$(PY) bench/subjects_robustness.py 200
 	$(PY) bench/compose_cost.py
 	$(PY) bench/annotate_cost.py --views 4 --frames 3

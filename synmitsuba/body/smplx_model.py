@@ -50,7 +50,7 @@ def _model_root(kind: str, path: str | None) -> tuple[str, str]:
                           f"register at {site}, download "
                           f"the model files and set {var} (or pass --model-path / model_path=) to the folder "
                           f"holding {prefix}_NEUTRAL.npz")
-    return os.fspath(path), var
+    return os.path.expanduser(os.fspath(path)), var
 
 
 def find_model(path: str | None = None, gender: str = "neutral", kind: str = "smplx") -> str:
@@ -96,7 +96,6 @@ class ModelFile:
     weights: np.ndarray         # (V, J)
     parents: np.ndarray         # (J,), -1 for the root
     joint_names: tuple
-    hands_mean: np.ndarray | None = None  # (2, 15, 3) relaxed hands (SMPL-X), axis-angle
 
     @property
     def n_betas(self) -> int:
@@ -142,12 +141,8 @@ def load_model(path: str | None = None, gender: str = "neutral", kind: str = "sm
                               f"layout for {V} vertices and {n} joints")
     table = SMPLX_JOINT_NAMES if kind == "smplx" else SMPL_JOINT_NAMES
     names = table[:n] if n <= len(table) else tuple(f"joint{i}" for i in range(n))
-    hands = None
-    if "hands_meanl" in data and "hands_meanr" in data:
-        hands = np.stack([np.asarray(data["hands_meanl"], np.float64).reshape(15, 3),
-                          np.asarray(data["hands_meanr"], np.float64).reshape(15, 3)])
     return ModelFile(kind, gender, file, v, np.asarray(data["f"], np.int64), dirs[:, :, :n_shape],
-                     dirs[:, :, n_shape:], posedirs, J, weights, parents, names, hands)
+                     dirs[:, :, n_shape:], posedirs, J, weights, parents, names)
 
 
 def smplx_body(betas=None, path: str | None = None, gender: str = "neutral") -> BodyMesh:
