@@ -16,7 +16,7 @@ import numpy as np
 
 from synmitsuba.body.binding import closest_points, signed_distance
 from synmitsuba.body.textures import GarmentTextureParams
-from synmitsuba.body.topology import cut
+from synmitsuba.body.topology import cut, weld
 from synmitsuba.geometry import face_normals, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, spec
 from synmitsuba.scene.layers import Layer
@@ -235,6 +235,7 @@ class GarmentMesh:
     uv: np.ndarray
     layer: int
     offset: float
+    hem: tuple = (0, 0)  # (faces, vertices) the turned-in band appended last
 
 
 def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
@@ -253,23 +254,24 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
         v, f, uv = _shoes(body, r, g, offset)
     else:
         v, f, uv = _cut_shell(body, r, split, kind.region(g, r, body.vertices), offset)
+        v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
         if kind.shape == "shell+flare":
             sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
             f = np.concatenate([f, sf + len(v)])
             v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
+    n_faces, n_vertices = len(f), len(v)
     if kind.shape != "hull":
         v, f, uv = _hem(body, v, f, uv, g.thickness)
     v = push_out(body, v)
-    return GarmentMesh(g, v, f, uv, int(kind.layer), offset)
+    return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
 
 
 def _hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
     """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
     thickness) deep towards the closest body point, so an edge seen in a close-up has thickness.
-    Openings are found with vertices merged by position (UV seams split the mesh but are not
-    openings)."""
-    _, first, merged = np.unique(np.round(v, 7), axis=0, return_index=True, return_inverse=True)
-    merged = merged.ravel()
+    Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
+    the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
+    merged = weld(v)
     directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
     m = np.sort(merged[directed], 1)
     _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
@@ -278,7 +280,9 @@ def _hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
         return v, f, uv
     ends = np.unique(edge)
     closest = closest_points(body.vertices, body.faces, v[ends])[0]
-    towards = (v[ends] - closest) / np.maximum(np.linalg.norm(v[ends] - closest, axis=1, keepdims=True), 1e-9)
+    gap = np.linalg.norm(v[ends] - closest, axis=1, keepdims=True)
+    towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9),  # on the body: the cloth's normal
+                       vertex_normals(v, f)[ends])
     inner = -np.ones(len(v), np.int64)
     inner[ends] = len(v) + np.arange(len(ends))
     a, b = edge.T

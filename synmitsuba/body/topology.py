@@ -69,3 +69,18 @@ def cut(faces: np.ndarray, phi: np.ndarray, *attributes: np.ndarray):
     out = [np.concatenate([a, (1 - t)[:, None] * a[pairs[:, 0]] + t[:, None] * a[pairs[:, 1]]])[used]
            for a in attributes]
     return (remap[f], *out)
+
+
+def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """A representative index per vertex: vertices within ``tol`` (chains of them) share one,
+    the lowest of the group; unlike rounding, no grid splits two close points."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+    n = len(vertices)
+    pairs = cKDTree(vertices).query_pairs(tol, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1]
+    first = np.full(labels.max() + 1, n)
+    np.minimum.at(first, labels, np.arange(n))
+    return first[labels]
