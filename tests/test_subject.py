@@ -131,12 +131,13 @@ def test_posing_pushes_garments_out_of_the_body_under_motion(human):
 
 
 def _openings(vertices, faces) -> np.ndarray:
-    """The edges (E, 2) of openings, in vertices merged by position (so UV seams are not
-    openings), and the merged index of every vertex."""
-    _, inv = np.unique(np.round(vertices, 6), axis=0, return_inverse=True)
-    f = inv.ravel()[faces]
+    """The edges (E, 2) of openings, in vertices welded within a micrometre (so UV seams are
+    not openings), and the welded index of every vertex."""
+    from synmitsuba.body.topology import weld
+    inv = weld(vertices)
+    f = inv[faces]
     edges, counts = np.unique(np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), 1), axis=0, return_counts=True)
-    return edges[counts == 1], inv.ravel()
+    return edges[(counts == 1) & (edges[:, 0] != edges[:, 1])], inv
 
 
 def _boundary_turning(vertices, faces) -> list[float]:
@@ -186,12 +187,12 @@ def test_garment_edges_follow_smooth_curves():
             kind = GARMENTS[g.params.kind]
             if kind.shape != "shell":
                 continue
-            rims, merged = _openings(g.vertices, g.faces)
-            shell = g.faces[:len(g.faces) - 2 * len(rims)]  # the turned-in band: two triangles per rim edge
+            band_faces, band_vertices = g.hem
+            shell = g.faces[:len(g.faces) - band_faces]
             cut += _boundary_turning(g.vertices, shell)
+            assert band_faces == 2 * len(_openings(g.vertices, shell)[0])  # the band: two triangles per opening edge
             d = signed_distance(h.body.vertices, h.body.faces, g.vertices)
-            rim = np.isin(merged, rims)
-            assert len(_openings(g.vertices, shell)[0]) == len(rims)
+            rim = np.arange(len(g.vertices)) >= len(g.vertices) - band_vertices  # the band's turned-in edge
             assert np.median(d[~rim]) - np.median(d[rim]) == pytest.approx(g.params.thickness, abs=0.0015)
             phi = kind.region(g.params, h.regions, h.body.vertices)[h.split.source]
             faces = h.split.faces[(phi[h.split.faces] >= 0).all(1)]
@@ -287,31 +288,55 @@ def test_skin_tones_span_light_to_dark_by_ita():
     assert img[3, 3, 0] / img[3, 3, 1] > img[0, 0, 0] / img[0, 0, 1]
 
 
-def test_sampled_adults_have_a_real_population_stature():
-    """Statures measured on the built body mesh (soles to crown) of 60 random recipes: a man or a
-    woman each (anny: gender 0 male, 1 female), medians near adult means (1.76 m, 1.63 m), spread
-    near 7 cm, nobody above 2.0 m or below 1.45 m; beards only on men."""
-    from synmitsuba.body.anny_model import anny_body
-    men, women, skirted = [], [], 0
-    for seed in range(60):
-        recipe = sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64})
+def _population_check(n: int, p_min: float) -> None:
+    """Stature and body mass index measured on the built anny meshes of ``n`` random recipes
+    against the population tables they are drawn from (Kolmogorov-Smirnov per sex)."""
+    from scipy.stats import kstest, lognorm, norm
+
+    from synmitsuba.body.anny_model import measures
+    from synmitsuba.body.recipe import BMI, STATURE_M
+    recipes = [sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64}) for seed in range(n)]
+    stature, mass = [], []
+    for i in range(0, n, 40):
+        s, m = measures([r.phenotypes for r in recipes[i:i + 40]])
+        stature += s.tolist()
+        mass += m.tolist()
+    stature, bmi = np.array(stature), np.array(mass) / np.array(stature) ** 2
+    female = np.array([r.phenotypes["gender"] >= 0.5 for r in recipes])
+    for sex, sel in (("male", ~female), ("female", female)):
+        assert sel.sum() >= 0.35 * n
+        mean, sd = STATURE_M[sex]
+        median, log_sd = BMI[sex]
+        assert kstest(stature[sel], norm(mean, sd).cdf).pvalue > p_min, (sex, np.median(stature[sel]))
+        assert kstest(bmi[sel], lognorm(s=log_sd, scale=median).cdf).pvalue > p_min, (sex, np.percentile(bmi[sel], [5, 50, 95]))
+    assert stature.max() < 2.0 and stature.min() > 1.45 and bmi.min() > 15.5 and bmi.max() < 43
+    return recipes
+
+
+def test_sampled_adults_match_population_stature_and_bmi():
+    """80 random recipes: a man or a woman each (anny: gender 0 male, 1 female), adults by
+    anny's age calibration, stature and BMI distributed as the tables say; beards only on men,
+    skirts rare on men; explicit phenotypes win."""
+    recipes = _population_check(80, 0.01)
+    skirted = 0
+    for recipe in recipes:
         g = recipe.phenotypes["gender"]
         assert g <= 0.2 or g >= 0.8
-        assert 0.6 <= recipe.phenotypes["age"] <= 1.0
-        stature = float(np.ptp(anny_body(recipe.phenotypes).vertices[:, 1]))
-        (women if g >= 0.5 else men).append(stature)
+        assert 0.76 <= recipe.phenotypes["age"] <= 0.9  # 18-80 years on anny's morphological-age anchors
         if g >= 0.5:
             assert recipe.hair.beard == "none"
         else:
             skirted += bool({"skirt", "dress"} & {k.kind for k in recipe.garments})
-    men, women = np.array(men), np.array(women)
-    assert skirted <= 4  # skirts and dresses: 3 % of men's outfits (equal odds would give about 13 here)
-    assert len(men) >= 20 and len(women) >= 20
-    assert 1.72 <= np.median(men) <= 1.80 and 1.59 <= np.median(women) <= 1.67
-    assert 0.04 <= men.std() <= 0.10 and 0.04 <= women.std() <= 0.10
-    assert max(men.max(), women.max()) < 2.0 and min(men.min(), women.min()) > 1.45
-    fixed = sm.sample_subject(np.random.default_rng(0), {"phenotypes": {"height": 0.9, "gender": 0.5}})
-    assert fixed.phenotypes["height"] == 0.9 and fixed.phenotypes["gender"] == 0.5
+    assert skirted <= 4  # skirts and dresses: 3 % of men's outfits (equal odds would give about 17 here)
+    fixed = sm.sample_subject(np.random.default_rng(0), {"phenotypes": {"height": 0.9, "gender": 0.5, "muscle": 0.3}})
+    assert fixed.phenotypes["height"] == 0.9 and fixed.phenotypes["gender"] == 0.5 and fixed.phenotypes["muscle"] == 0.3
+    child = sm.sample_subject(np.random.default_rng(1), {"age_years": [8, 10]})
+    assert child.phenotypes["age"] < 0.6  # children only when asked for
+
+
+@pytest.mark.slow
+def test_a_thousand_recipes_match_the_population_tables():
+    _population_check(1000, 0.001)
 
 
 @pytest.mark.parametrize("seed", [0, 3])

@@ -150,8 +150,39 @@ def shaped_batch(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
 def statures(rows: list[dict]) -> np.ndarray:
     """Standing height (m, soles to crown, rest pose) of the anny body for each complete set of
     phenotypes in ``rows``."""
-    y = shaped_batch(rows)[0][..., 1]
-    return y.max(1) - y.min(1)
+    return measures(rows)[0]
+
+
+DENSITY_KG_M3 = 980.0  # anny's Anthropometry: mass = volume x density
+
+
+def measures(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """(stature m, mass kg) of the anny body for each complete set of phenotypes in ``rows``:
+    soles to crown in the rest pose, and the mesh's enclosed volume times ``DENSITY_KG_M3``."""
+    verts = shaped_batch(rows)[0]
+    tri = verts[:, _static()["faces"]]
+    volume = np.abs(np.einsum("bfi,bfi->b", tri[:, :, 0], np.cross(tri[:, :, 1], tri[:, :, 2]))) / 6
+    return verts[..., 1].max(1) - verts[..., 1].min(1), volume * DENSITY_KG_M3
+
+
+@functools.lru_cache(maxsize=1)
+def shape_calibration() -> dict:
+    """anny's own calibration (``anny/data/shape_calibration``, fitted to WHO data by sex) as
+    numpy: ``{"male"|"female": {"height"|"weight"|"muscle"|"proportions": (age anchors, alpha
+    anchors, beta anchors)}, "age": (anny age anchors, years anchors)}`` for conditional Beta
+    distributions of each phenotype given anny's age."""
+    import torch
+    out = {}
+    for sex, name in (("male", "boys"), ("female", "girls")):
+        state = torch.load(os.path.join(anny_root(), "data", "shape_calibration", f"{name}.pth"), weights_only=True,
+                           map_location="cpu")
+        out[sex] = {k: tuple(state[f"conditional_{k}_distribution"][a].numpy().astype(np.float64)
+                             for a in ("age_anchors", "alpha_anchors", "beta_anchors"))
+                    for k in ("height", "weight", "muscle", "proportions")}
+        ages = state["morphological_age_mapping"]
+        out["age"] = (ages["anny_age_anchors"].numpy().astype(np.float64),
+                      ages["morphological_age_anchors"].numpy().astype(np.float64))
+    return out
 
 
 def height_for_stature(phenotypes: dict, stature: float) -> float:

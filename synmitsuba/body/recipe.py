@@ -8,12 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_accessories
-from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES, height_for_stature
+from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES, height_for_stature, measures, shape_calibration
 from synmitsuba.body.garments import GARMENTS, OUTFITS, GarmentParams, sample_garment
 from synmitsuba.body.hair import STYLES, HairParams, sample_hair
 from synmitsuba.body.textures import SkinParams, sample_lab_colour, sample_skin
 from synmitsuba.errors import ConfigError
-from synmitsuba.schema import Choice, Flag, ListOf, Nested, Number, Params, from_dict, optional, spec
+from synmitsuba.schema import Choice, Flag, ListOf, Nested, Number, Params, Range, from_dict, optional, spec
 
 RECIPE_VERSION = 1
 # Layered subjects are built on anny; a layered SMPL-X subject does not exist yet (the bare
@@ -57,6 +57,14 @@ class SubjectRecipe(Params):
             raise ConfigError("recipe", text[:40], f"not JSON: {exc}") from None
 
 
+ADULT_YEARS = (18.0, 80.0)  # drawn uniformly, mapped onto anny's age by its calibration
+STATURE_M = {"male": (1.76, 0.07), "female": (1.63, 0.065)}  # adults' mean and standard deviation
+# Adults' body mass index (kg/m^2): log-normal, median and log standard deviation per sex, a
+# spread between NCD-RisC's world and NHANES's US adults (5-95 %: about 19.5-35); drawn within
+# 2.5 standard deviations (16.6-41 for men), as wide as BEDLAM 2.0's 18-41.
+BMI = {"male": (26.5, 0.17), "female": (26.0, 0.20)}
+
+
 @dataclass
 class SubjectConfig(Params):
     """What ``sample_subject`` may fix; everything else is sampled."""
@@ -68,28 +76,75 @@ class SubjectConfig(Params):
     hair_style: str | None = spec(None, optional(Choice(tuple(STYLES))))
     accessories: list | None = spec(None, optional(ListOf(Choice(BUILDERS))))
     texture_size: int = spec(256, Choice(TEXTURE_SIZES))
+    age_years: list = spec(factory=lambda: list(ADULT_YEARS), check=Range(0.0, 90.0, "years"),
+                           doc="ages drawn from (adults by default; below 18 anny's calibration shapes children)")
 
 
-ADULT_AGE = (0.62, 1.0)  # anny's age: 0.333 child, 0.667 young adult, 1.0 old
-STATURE_M = {"male": (1.76, 0.07), "female": (1.63, 0.065)}  # adults' mean and standard deviation
+def anny_age(years: float) -> float:
+    """anny's ``age`` phenotype for an age in years (anny's morphological-age anchors)."""
+    anny_anchors, year_anchors = shape_calibration()["age"]
+    return float(np.interp(years, year_anchors, anny_anchors))
 
 
-def sample_phenotypes(rng: np.random.Generator, fixed: dict | None = None) -> dict:
-    """anny phenotypes of a random adult: a man or a woman (gender near 0 or near 1), stature
-    from a normal distribution per sex (within 2.5 standard deviations; ``STATURE_M``) reached by
-    solving for ``height``; muscle, weight and proportions uniform. ``fixed`` values win; a
-    fixed ``height`` is kept as given."""
+def calibrated(sex: str, phenotype: str, age: float, u: float) -> float:
+    """The ``u``-quantile of anny's calibrated Beta distribution of ``phenotype`` given ``age``
+    (its WHO-fitted ``shape_calibration``): a draw from it when ``u`` is uniform."""
+    from scipy.stats import beta
+    ages, alphas, betas = shape_calibration()[sex][phenotype]
+    a, b = np.interp(age, ages, alphas), np.interp(age, ages, betas)
+    return float(beta.ppf(u, a, b))
+
+
+def weight_for_bmi(phenotypes: dict, bmi: float, stature: float, keep_muscle: bool = False) -> tuple[float, float]:
+    """anny's ``weight`` (and, where that cannot reach the target and ``keep_muscle`` is false, a
+    lower ``muscle``: anny's mass range is widest at low muscle) for a body mass index at this
+    stature, from mass on a grid of weights (one batched pass per muscle tried). Returns
+    (weight, muscle)."""
+    grid = np.linspace(0.0, 1.0, 5)
+    muscle = phenotypes["muscle"]
+    for m in ((muscle,) if keep_muscle else (muscle, 0.5 * muscle, 0.0)):
+        _, mass = measures([{**phenotypes, "muscle": m, "weight": float(w)} for w in grid])
+        curve = mass / stature ** 2
+        for k in range(len(grid) - 1):
+            lo, hi = curve[k], curve[k + 1]
+            if min(lo, hi) <= bmi <= max(lo, hi) and hi != lo:
+                return float(grid[k] + (bmi - lo) / (hi - lo) * (grid[k + 1] - grid[k])), m
+    return float(grid[np.argmin(np.abs(curve - bmi))]), m
+
+
+def sample_phenotypes(rng: np.random.Generator, fixed: dict | None = None, years=ADULT_YEARS) -> dict:
+    """anny phenotypes of a random person from population data: a man or a woman (gender near 0
+    or near 1); age uniform in ``years`` (adults by default), mapped by anny's calibration;
+    muscle and proportions from anny's WHO-calibrated distributions at that age; adults'
+    stature from a normal distribution per sex (``STATURE_M``, within 2.5 standard deviations)
+    reached by solving for ``height`` and body mass index from a log-normal per sex (``BMI``)
+    reached by solving for ``weight``; under 18 years, height and weight from anny's
+    calibration instead. ``fixed`` values win; a fixed ``height`` or ``weight`` is kept."""
+    from scipy.stats import norm
     fixed = fixed or {}
-    pheno = {k: round(float(v), 4) for k, v in zip(PHENOTYPES, rng.uniform(0, 1, len(PHENOTYPES)))}
+    u = rng.uniform(0, 1, len(PHENOTYPES))  # gender, age, muscle, weight, height, proportions
     female = rng.random() < 0.5
-    pheno["gender"] = round(float(rng.uniform(0.8, 1.0) if female else rng.uniform(0.0, 0.2)), 4)
-    pheno["age"] = round(float(rng.uniform(*ADULT_AGE)), 4)
+    sex = "female" if female else "male"
+    pheno = {"gender": float(rng.uniform(0.8, 1.0) if female else rng.uniform(0.0, 0.2))}
+    age_years = float(rng.uniform(*years))
     z = float(np.clip(rng.standard_normal(), -2.5, 2.5))
+    if "age" in fixed:
+        anny_anchors, year_anchors = shape_calibration()["age"]
+        age_years = float(np.interp(fixed["age"], anny_anchors, year_anchors))
+    pheno["age"] = anny_age(age_years)
+    for k, i in (("muscle", 2), ("weight", 3), ("height", 4), ("proportions", 5)):
+        pheno[k] = calibrated(sex, k, pheno["age"], float(u[i]))
     pheno.update(fixed)
-    if "height" not in fixed:
-        mean, sd = STATURE_M["female" if pheno["gender"] >= 0.5 else "male"]
-        pheno["height"] = round(height_for_stature(pheno, mean + sd * z), 4)
-    return pheno
+    sex = "female" if pheno["gender"] >= 0.5 else "male"
+    if age_years >= 18.0 and "height" not in fixed:
+        stature = STATURE_M[sex][0] + STATURE_M[sex][1] * z
+        pheno["height"] = height_for_stature(pheno, stature)
+        if "weight" not in fixed:
+            median, log_sd = BMI[sex]
+            bmi = median * np.exp(log_sd * np.clip(norm.ppf(u[3]), -2.5, 2.5))
+            pheno["weight"], pheno["muscle"] = weight_for_bmi(pheno, bmi, stature, "muscle" in fixed)
+            pheno["height"] = height_for_stature(pheno, stature)  # weight moves the crown a little
+    return {k: round(float(np.clip(pheno[k], 0.0, 1.0)), 4) for k in PHENOTYPES}
 
 
 def outfit_weights(gender: float) -> np.ndarray:
@@ -104,7 +159,7 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     ``phenotypes`` (partial), ``outfit`` (garment kinds), ``jacket``, ``shoes``, ``hair_style``,
     ``accessories`` (kinds), ``texture_size``."""
     cfg = config if isinstance(config, SubjectConfig) else SubjectConfig.from_dict(config or {}, "config")
-    pheno = sample_phenotypes(rng, cfg.phenotypes)
+    pheno = sample_phenotypes(rng, cfg.phenotypes, cfg.age_years)
     outfit = list(cfg.outfit or OUTFITS[int(rng.choice(len(OUTFITS), p=outfit_weights(pheno["gender"])))])
     draw = rng.random() < 0.25  # drawn even when fixed, so fixing one choice keeps the others
     if (draw if cfg.jacket is None else cfg.jacket) and "dress" not in outfit and "jacket" not in outfit:

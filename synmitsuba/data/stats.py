@@ -1,6 +1,7 @@
 """What a generated dataset holds: counts and the distributions users check first (visible
-fraction, keypoint visibility, subject height, camera distance and pitch, skin tone ITA,
-garment kinds, motions), as a dict (written as JSON) and one matplotlib figure (PNG)."""
+fraction, keypoint visibility, subject height, stature and body mass index, camera distance
+and pitch, skin tone ITA, garment kinds, motions), as a dict (written as JSON) and one
+matplotlib figure (PNG)."""
 from __future__ import annotations
 
 import collections
@@ -49,10 +50,24 @@ def dataset_stats(root: str) -> dict:
             "environments": dict(collections.Counter(sc["environment"] for sc in scenes)),
             "visible_fraction": vis_frac, "keypoint_visibility": dict(vis_classes),
             "subject_height_m": [s["height"] for s in subjects],
+            **_body_measures([s["recipe"]["phenotypes"] for s in subjects]),
             "camera_distance_m": dist, "camera_pitch_deg": pitch,
             "skin_ita_deg": [s["recipe"]["skin"]["ita_deg"] for s in subjects],
             "garments": dict(collections.Counter(g["kind"] for s in subjects for g in s["recipe"]["garments"])),
             "motions": dict(collections.Counter(os.path.basename(s["motion"]["source"]) for s in subjects))}
+
+
+def _body_measures(phenotypes: list[dict], chunk: int = 32) -> dict:
+    """Each subject's stature (m, soles to crown at rest) and body mass index (kg/m^2) of its
+    anny body: what ``sample_subject`` draws from population data."""
+    from synmitsuba.body.anny_model import PHENOTYPES, measures
+    rows = [{k: p.get(k, 0.5) for k in PHENOTYPES} for p in phenotypes]
+    stature, mass = [], []
+    for i in range(0, len(rows), chunk):
+        s, m = measures(rows[i:i + chunk])
+        stature += s.tolist()
+        mass += m.tolist()
+    return {"stature_m": stature, "bmi": [m / s ** 2 for s, m in zip(stature, mass)]}
 
 
 def stats_figure(stats: dict, path: str) -> str:
@@ -62,9 +77,10 @@ def stats_figure(stats: dict, path: str) -> str:
     import matplotlib.pyplot as plt
 
     from synmitsuba.io.preview import atomic_path
-    hists = ("visible_fraction", "subject_height_m", "camera_distance_m", "camera_pitch_deg", "skin_ita_deg")
+    hists = ("visible_fraction", "subject_height_m", "stature_m", "bmi", "camera_distance_m", "camera_pitch_deg",
+             "skin_ita_deg")
     bars = ("keypoint_visibility", "garments", "motions")
-    fig, axes = plt.subplots(2, 4, figsize=(16, 7))
+    fig, axes = plt.subplots(2, 5, figsize=(20, 7))
     for ax, key in zip(axes.flat, hists + bars):
         if key in hists:
             ax.hist(stats[key], bins=20, color="#3a6ea5")
