@@ -54,20 +54,32 @@ def _glasses(p: AccessoryParams, body, head):
         ring_path |= np.abs(np.hypot(face[:, 0] - mid[0] - x * half, face[:, 1] - mid[1]) - r) < 0.005
     bridge = (np.abs(face[:, 0] - mid[0]) < 0.008) & (np.abs(face[:, 1] - mid[1] - 0.004) < 0.004)
     z = max(face[ring_path, 2].max() + 0.006, face[bridge, 2].max() + 0.004)
-    band = (np.abs(face[:, 1] - mid[1]) < 0.02) & (face[:, 2] < z) & (face[:, 2] > ears[:, 2].mean() - 0.01)
-    side = np.abs(face[band, 0] - mid[0]).max() + 0.004
     back = ears[:, 2].mean() - 0.005
     parts = [trimesh.creation.box([2 * (half - r) + 0.006, 0.004, 0.004])]  # the bridge
     parts[0].apply_translation([mid[0], mid[1] + 0.004, z])
     for x in (-1, 1):
         ring = trimesh.creation.torus(r, 0.0025, major_sections=24, minor_sections=6)
         ring.apply_translation([mid[0] + x * half, mid[1], z])
-        end = trimesh.creation.box([side - half - r + 0.004, 0.004, 0.004])
-        end.apply_translation([mid[0] + x * (side + half + r) / 2, mid[1], z])
-        arm = trimesh.creation.box([0.004, 0.004, z - back])
-        arm.apply_translation([mid[0] + x * side, mid[1], (z + back) / 2])
-        parts += [ring, end, arm]
+        path = _temple(face, mid, x, z, back)  # along the side of the head, 4 mm off it
+        points = [[mid[0] + x * (half + r), mid[1], z]] + [[mid[0] + x * w, mid[1], zk] for w, zk in path]
+        parts += [ring] + [trimesh.creation.cylinder(0.002, segment=[a, b], sections=6)
+                           for a, b in zip(points[:-1], points[1:])]
     return _place(trimesh.util.concatenate(parts), R, c)
+
+
+def _temple(face: np.ndarray, mid: np.ndarray, x: int, front: float, back: float, steps: int = 6) -> list:
+    """(half-width, z) points of one temple from the frame back to the ear: at each depth the
+    head's widest point at eye height on that side, plus 4 mm, never narrower than the step
+    before (a temple runs straight or outward; it does not bend into the head)."""
+    side = (face[:, 0] - mid[0]) * x > 0
+    level = np.abs(face[:, 1] - mid[1]) < 0.015
+    out, width = [], 0.0
+    for zk in np.linspace(front, back, steps):
+        near = side & level & (np.abs(face[:, 2] - zk) < 0.012)
+        if near.any():
+            width = max(width, np.abs(face[near, 0] - mid[0]).max() + 0.004)
+        out.append((width, zk))
+    return out
 
 
 def under_cap(head, points: np.ndarray) -> np.ndarray:
