@@ -63,3 +63,23 @@ def test_normals_areas_and_camera_rays():
     d = camera_ray_matrix(K, R) @ [60.5, 30.5, 1]
     x_cam = R @ d
     np.testing.assert_allclose((K @ x_cam)[:2] / (K @ x_cam)[2], [60.5, 30.5])
+
+
+def test_local_rotations_undo_forward_kinematics():
+    from synmitsuba.body.skeleton import Skeleton, forward_kinematics, local_rotations
+    from synmitsuba.geometry import axis_angle_to_matrix
+    rng = np.random.default_rng(0)
+    sk = Skeleton(("a", "b", "c", "d"), [-1, 0, 1, 1], rng.normal(size=(4, 3)))
+    R = axis_angle_to_matrix(rng.normal(size=(5, 4, 3)))
+    G = forward_kinematics(sk, R)[0]
+    assert np.allclose(local_rotations(G, sk.parents), R, atol=1e-12)
+
+
+def test_weld_joins_points_within_a_micrometre_whatever_the_grid():
+    from synmitsuba.body.topology import weld
+    base = np.array([[0.1234565, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 0.0, 0.0]])
+    pts = np.concatenate([base, base + [4e-7, 0, 0], base + [3e-6, 0, 0]])  # straddles a 1e-6 rounding cell
+    rep = weld(pts)
+    d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)  # brute force: same group iff within 1e-6
+    assert ((rep[:, None] == rep[None]) == (d <= 1e-6)).all()
+    assert (rep <= np.arange(len(pts))).all()  # the lowest index of its group

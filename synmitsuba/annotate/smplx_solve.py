@@ -17,7 +17,7 @@ import numpy as np
 from synmitsuba.annotate.smplx_layer import ModelLayer, rodrigues
 from synmitsuba.body.binding import closest_points
 from synmitsuba.body.lbs import bone_transforms, skin
-from synmitsuba.body.skeleton import Skeleton, forward_kinematics
+from synmitsuba.body.skeleton import Skeleton, forward_kinematics, local_rotations
 from synmitsuba.body.smplx_model import ModelFile
 from synmitsuba.geometry import axis_angle_to_matrix, matrix_to_axis_angle, vertex_normals
 from synmitsuba.motion.names import TORSO, body_model_to_anny, canonical_map
@@ -89,11 +89,7 @@ def _rest_alignment(model: ModelFile, body, pairs: dict[int, int]) -> np.ndarray
     rest = body.skeleton.rest_positions
     bones = {i: (j, rest[pairs[j]] - rest[pairs[i]]) for i, j in children.items()
              if i != 0 and i in pairs and j in pairs}
-    G = aligned_globals(sk, bones)
-    local = G.copy()
-    has_parent = model.parents >= 0
-    local[has_parent] = np.swapaxes(G[model.parents[has_parent]], -1, -2) @ G[has_parent]
-    return local
+    return local_rotations(aligned_globals(sk, bones), model.parents)
 
 
 # -- optimisation ------------------------------------------------------------------------------
@@ -255,18 +251,13 @@ def _initial_pose(shape: Shape, pairs: dict[int, int], targets: _Targets, rest: 
                             axis_angle_to_matrix(shape.pose))[0]
     F = len(targets.globals)
     W = np.empty((F, len(m.parents), 3, 3))
-    local = np.empty_like(W)
     for j, p in enumerate(m.parents):
-        if j in pairs:
-            W[:, j] = targets.globals[:, pairs[j]] @ W0[j]
-        else:
-            W[:, j] = W[:, p] @ (W0[p].T @ W0[j])
-        local[:, j] = W[:, j] if p < 0 else np.swapaxes(W[:, p], -1, -2) @ W[:, j]
+        W[:, j] = targets.globals[:, pairs[j]] @ W0[j] if j in pairs else W[:, p] @ (W0[p].T @ W0[j])
     J0 = m.J_regressor[0] @ (m.v_template + m.shapedirs[:, :, :len(shape.betas)] @ shape.betas)
     root = pairs[0]
     pelvis = targets.joints[:, root] + np.einsum("fab,b->fa", targets.globals[:, root], J0 + shape.transl - rest[root])
     jt = {j: targets.joints[:, a] + np.einsum("fab,b->fa", targets.globals[:, a], shape.offsets[j]) for j, a in pairs.items()}
-    return matrix_to_axis_angle(local), pelvis - J0, jt, J0
+    return matrix_to_axis_angle(local_rotations(W, m.parents)), pelvis - J0, jt, J0
 
 
 @dataclass

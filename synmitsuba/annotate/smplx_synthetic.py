@@ -16,7 +16,7 @@ import numpy as np
 
 from synmitsuba.body.anny_model import PHENOTYPES, _static, shaped_batch
 from synmitsuba.body.lbs import bone_transforms, skin
-from synmitsuba.body.skeleton import Skeleton, forward_kinematics
+from synmitsuba.body.skeleton import Skeleton, forward_kinematics, local_rotations
 from synmitsuba.body.smplx_model import KINDS, SMPL_JOINT_NAMES, SMPL_PARENTS, SMPLX_JOINT_NAMES, SMPLX_PARENTS
 from synmitsuba.motion.names import TORSO, body_model_to_anny, canonical_map
 from synmitsuba.motion.retargeting import tpose_globals
@@ -82,8 +82,7 @@ def _tposed(verts: np.ndarray, heads: np.ndarray, st: dict) -> tuple[np.ndarray,
     those global rotations (J, 3, 3)."""
     sk = Skeleton(st["bones"], st["parents"], heads[0])
     G = tpose_globals(sk, {n: c for n, c in canonical_map(st["bones"]).items() if c not in TORSO})
-    local = G.copy()
-    local[st["parents"] >= 0] = np.swapaxes(G[st["parents"][st["parents"] >= 0]], -1, -2) @ G[st["parents"] >= 0]
+    local = local_rotations(G, st["parents"])
     out_v, out_h = np.empty_like(verts), np.empty_like(heads)
     for i, (v, h) in enumerate(zip(verts, heads)):
         sk_i = Skeleton(st["bones"], st["parents"], h)
@@ -129,7 +128,4 @@ def true_pose(path: str, body, clip, frames=None) -> np.ndarray:
     names = SMPLX_JOINT_NAMES if len(parents) == len(SMPLX_JOINT_NAMES) else SMPL_JOINT_NAMES
     D = forward_kinematics(body.skeleton, clip.rotations[frames], clip.root_translation[frames])[0]
     W = D[:, _joint_bones(names, body.skeleton.names)] @ np.swapaxes(rest, -1, -2)
-    local = W.copy()
-    has = parents >= 0
-    local[:, has] = np.swapaxes(W[:, parents[has]], -1, -2) @ W[:, has]
-    return local
+    return local_rotations(W, parents)

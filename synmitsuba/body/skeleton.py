@@ -56,6 +56,17 @@ class Skeleton:
             raise KeyError(f"joint {name!r} is not in this skeleton; joints: {', '.join(self.names[:12])}...") from None
 
 
+def local_rotations(global_rotations: np.ndarray, parents) -> np.ndarray:
+    """Local rotations (..., J, 3, 3) from global ones: the inverse of ``forward_kinematics``'s
+    ``G_i = G_parent(i) @ R_i`` (a root keeps its global rotation)."""
+    G = np.asarray(global_rotations, dtype=np.float64)
+    parents = np.asarray(parents)
+    local = G.copy()
+    has = parents >= 0
+    local[..., has, :, :] = np.swapaxes(G[..., parents[has], :, :], -1, -2) @ G[..., has, :, :]
+    return local
+
+
 def forward_kinematics(skeleton: Skeleton, local_rotations: np.ndarray,
                        root_translation: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Global rotations (..., J, 3, 3) and joint positions (..., J, 3) from local rotations.

@@ -16,6 +16,7 @@ from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.errors import ConfigError
 from synmitsuba.generate.run import manifest_entries
+from synmitsuba.io.dataset import list_samples
 from synmitsuba.io.exr import update_subjects
 from synmitsuba.scene.camera import Camera
 
@@ -25,8 +26,7 @@ def fit_sequence(folder: str, options: SMPLXOptions) -> dict:
     the fits' error summary."""
     with open(os.path.join(folder, "scene.json")) as fh:
         spec = SceneSpec.from_json(fh.read())
-    stems = sorted(os.path.join(folder, f[:-5]) for f in os.listdir(folder)
-                   if f.endswith(".json") and f != "scene.json" and os.path.isfile(os.path.join(folder, f[:-5] + ".exr")))
+    stems = list_samples(folder)
     sides = {}
     for stem in stems:
         with open(f"{stem}.json") as fh:
