@@ -11,7 +11,7 @@ export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
 
 PROBE := $(PY) -c "from synmitsuba.engine.llvm import main; raise SystemExit(main(['--probe']))"
 
-.PHONY: setup llvm demo test test-all bench clean
+.PHONY: setup llvm demo test test-all bench bench-cycles clean
 
 setup: $(STAMP) llvm
 
@@ -41,6 +41,10 @@ demo: setup
 	$(VENV)/bin/synmitsuba stats out/demo
 	@echo "demo dataset: $(CURDIR)/out/demo (seq_*/ samples, manifest.jsonl, contact_sheet.png, stats.png)"
 
+bench-cycles: setup   # Blender Cycles (bpy from PyPI, in its own environment) against us, same scene
+	test -x .bpy/bin/python || ($(PYTHON) -m venv .bpy && .bpy/bin/pip install -q bpy)
+	$(PY) bench/render_quality.py --bpy .bpy/bin/python --images out/bench
+
 test: setup
 	$(PY) -m pytest -q
 
@@ -53,6 +57,8 @@ bench: setup
 	$(PY) bench/import_time.py
 	$(PY) bench/render_passes.py
 	$(PY) bench/frame_cost.py --frames 30
+	$(PY) bench/frame_cost.py --frames 60 --count 4 --views 4   # memory over a long sequence
+	$(PY) bench/render_quality.py   # PSNR/SSIM per second; make bench-cycles adds Blender Cycles
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
 	$(PY) bench/garment_collisions.py --subjects 20 --stride 3

@@ -114,6 +114,72 @@ def _light(light) -> dict:
     raise TypeError(light)
 
 
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+
+
+def _probe_point(scene: Scene) -> np.ndarray:
+    """Where emitters are weighed: the centre of the subjects' (instances') bounds, else 1 m
+    above the origin."""
+    boxes = [(m.vertices.min(0), m.vertices.max(0)) for m in scene.meshes.values() if m.instance > 0]
+    if not boxes:
+        return np.array([0.0, 1.0, 0.0])
+    return (np.min([b[0] for b in boxes], 0) + np.max([b[1] for b in boxes], 0)) / 2
+
+
+def direct_light(emitter_dict: dict, at, n: int = 32) -> float:
+    """The luminance an emitter sends to a point ``at``, as the mean irradiance on the faces of
+    a cube there, the floor face left out (what lights heads, faces and flanks): an n x n grid
+    of the emitter's own importance samples, so delta lights, suns and area lights are exact
+    or nearly so. Deterministic (no random numbers)."""
+    import drjit as dr
+    import mitsuba as mi
+    obj = mi.load_dict(emitter_dict)
+    emitter = obj if isinstance(obj, mi.Emitter) else obj.emitter()
+    u = (np.arange(n) + 0.5) / n
+    su, sv = np.meshgrid(u, u)
+    it = dr.zeros(mi.Interaction3f, n * n)
+    it.p = mi.Point3f(*(float(x) for x in at))
+    ds, weight = emitter.sample_direction(it, mi.Point2f(mi.Float(su.ravel()), mi.Float(sv.ravel())), True)
+    d, w = np.array(ds.d).reshape(3, -1).T, np.array(weight).reshape(3, -1).T
+    g = (np.maximum(d[:, 1], 0) + np.abs(d[:, 0]) + np.abs(d[:, 2])) / 5
+    return float(np.mean((w @ LUMINANCE) * g))
+
+
+ENVIRONMENT_SHARE = 0.25  # an environment's light counts a quarter: BSDF samples find it too
+
+
+def quarters(light: list[float]) -> list[int]:
+    """Up to four emitters' shares of the light samples in whole quarters, each at least one
+    (largest remainders): the low-discrepancy samplers stratify the emitter choice, so with
+    shares of k/4 every 4 samples of a pixel go to the emitters in exactly those numbers."""
+    n = len(light)
+    share = np.asarray(light, float) / max(sum(light), 1e-12)
+    extra = np.clip(4 * share - 1, 0, None)
+    q = np.ones(n, int) + np.floor(extra * (4 - n) / max(extra.sum(), 1e-12)).astype(int)
+    for i in np.argsort(-(extra - np.floor(extra)), kind="stable")[: 4 - int(q.sum())]:
+        q[i] += 1
+    return q.tolist()
+
+
+def _weigh_emitters(emitters: list[dict], at, environment: bool) -> None:
+    """Set each emitter's ``sampling_weight`` from its direct light at ``at``. Mitsuba picks
+    one emitter per light sample, uniformly unless told: with a sky and a sun lamp half the
+    light samples went to the sky. Lamps (the sun, points, panels) are found only by light
+    samples, while a wide sky is found by BSDF samples too, so the environment's light counts
+    ``ENVIRONMENT_SHARE`` of its value; up to four emitters get whole ``quarters``, more get
+    their light (at least 1 % of the mean, so no light is left unsampled). On
+    bench/render_quality.py's scene (sky and sun lamp), PSNR at 1/4/16/64 spp: uniform
+    15.5/32.0/38.5/43.5 dB, by light alone 14.6/26.3/35.9/43.1, sun 3 : sky 1 18.6/33.8/40.9/45.5.
+    ``environment``: the first dict is the environment."""
+    light = [direct_light(e, at) for e in emitters]
+    if environment:
+        light[0] *= ENVIRONMENT_SHARE
+    floor = 0.01 * max(np.mean(light), 1e-12)
+    weights = quarters(light) if len(light) <= 4 else [max(w, floor) for w in light]
+    for e, w in zip(emitters, weights):
+        (e["emitter"] if "emitter" in e else e)["sampling_weight"] = float(w)
+
+
 # how often a Scene was loaded into Mitsuba and updated in place (tests assert on these)
 STATS = {"loads": 0, "updates": 0, "gc_seconds": 0.0}
 
@@ -130,6 +196,7 @@ class BuiltScene:
     instance_ids: list         # instance ids > 0 present in the scene
     names: list = field(default_factory=list)  # shape names (meshes, then curves), as the "shape" table counts them
     _dr_tables: dict = field(default_factory=dict)
+    _pushed: dict = field(default_factory=dict)  # name -> the positions array Mitsuba holds (identity)
 
     def lookup(self, name: str, reg, active):
         """Per-ray table value (UInt32) for registry ids ``reg``; 0 where not ``active``."""
@@ -141,12 +208,18 @@ class BuiltScene:
 
 
 def _update_in_place(cached: BuiltScene, scene: Scene) -> None:
+    """Push the shapes whose positions array was replaced since the last push (the static
+    ground and props are left alone: Mitsuba then re-derives only what moved)."""
     import mitsuba as mi
     for name, m in scene.meshes.items():
-        cached.params[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
+        if cached._pushed.get(name) is not m.vertices:
+            cached.params[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
+            cached._pushed[name] = m.vertices
     for name, c in scene.curves.items():
-        rows = np.concatenate([c.points, c.radius[..., None]], -1).astype(np.float32)
-        cached.params[f"{name}.control_points"] = mi.Float(rows.ravel())
+        if cached._pushed.get(name) is not c.points or cached._pushed.get(f"{name}.radius") is not c.radius:
+            rows = np.concatenate([c.points, c.radius[..., None]], -1).astype(np.float32)
+            cached.params[f"{name}.control_points"] = mi.Float(rows.ravel())
+            cached._pushed[name], cached._pushed[f"{name}.radius"] = c.points, c.radius
     cached.params.update()
     cached.versions = (scene.structure_version, scene.geometry_version)
     STATS["updates"] += 1
@@ -227,10 +300,15 @@ def build(scene: Scene) -> BuiltScene:
         d["environment"] = env
     for i, light in enumerate(scene.lights):
         d[f"light_{i}"] = _light(light)
+    emitters = [v for k, v in d.items() if k == "environment" or k.startswith("light_")]
+    if len(emitters) > 1:
+        _weigh_emitters(emitters, _probe_point(scene), environment="environment" in d)
     mi_scene = mi.load_dict(d)
     tables, ids = _tables(mi_scene, scene)
     built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids,
                        names=[*scene.meshes, *scene.curves])
+    built._pushed.update({n: m.vertices for n, m in scene.meshes.items()})
+    built._pushed.update({k: v for n, c in scene.curves.items() for k, v in ((n, c.points), (f"{n}.radius", c.radius))})
     scene._built = built
     STATS["loads"] += 1
     return built
