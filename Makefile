@@ -57,7 +57,7 @@ bench: setup
 	$(PY) bench/import_time.py
 	$(PY) bench/render_passes.py
 	$(PY) bench/frame_cost.py --frames 30
-	$(PY) bench/frame_cost.py --frames 60 --count 4 --views 4   # memory over a long sequence
+	$(PY) bench/frame_cost.py --frames 60 --count 4 --views 4 --no-raw   # memory over a long sequence
 	$(PY) bench/render_quality.py   # PSNR/SSIM per second; make bench-cycles adds Blender Cycles
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py

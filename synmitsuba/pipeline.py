@@ -24,7 +24,7 @@ from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.compose.subjects import add_subjects
-from synmitsuba.engine.build import build
+from synmitsuba.engine.build import build, settle_frame_memory
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.exr import write_sample
 from synmitsuba.render.passes import render
@@ -90,6 +90,7 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
                 stem = os.path.join(folder, f"f{k:04d}_{name}")
                 write_sample(sample, stem)
                 results.append(stem)
+        settle_frame_memory()
     return results
 
 
@@ -131,6 +132,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
                 annotator.annotate(sample, scene, int(f), valid=view.valid)
                 _add_flow(sample, scene, placed, view, int(f), spec.n_frames, geometry, neighbours)
             yield int(f), name, sample
+        settle_frame_memory()
 
 
 class _GeometryCache:

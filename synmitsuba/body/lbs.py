@@ -15,8 +15,9 @@ def bone_transforms(skeleton: Skeleton, rotations=None, root_translation=None) -
     return G, b
 
 
-def skin(vertices: np.ndarray, weights: np.ndarray, transforms: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """Posed vertices (V, 3): sum_j w_vj (A_j x_v + b_j)."""
+def skin(vertices: np.ndarray, weights, transforms: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """Posed vertices (V, 3): sum_j w_vj (A_j x_v + b_j); ``weights`` (V, J), dense or a
+    scipy sparse matrix."""
     A, b = transforms
     M = np.concatenate([A.reshape(len(A), 9), b], 1)          # (J, 12)
     blended = weights @ M                                      # (V, 12)

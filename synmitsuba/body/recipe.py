@@ -32,7 +32,8 @@ class SubjectRecipe(Params):
     garments: list = spec(factory=list, check=ListOf(Nested(GarmentParams)), doc="GarmentParams, any order")
     hair: HairParams = spec(factory=HairParams, check=Nested(HairParams))
     accessories: list = spec(factory=list, check=ListOf(Nested(AccessoryParams)))
-    texture_size: int = spec(256, Choice(TEXTURE_SIZES))
+    texture_size: int = spec(1024, Choice(TEXTURE_SIZES), doc="garment texture side (the skin's is twice, at most "
+                             "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
 
     def __post_init__(self):
         kinds = [g.kind for g in self.garments]
@@ -75,7 +76,8 @@ class SubjectConfig(Params):
     shoes: bool | None = spec(None, optional(Flag()))
     hair_style: str | None = spec(None, optional(Choice(tuple(STYLES))))
     accessories: list | None = spec(None, optional(ListOf(Choice(BUILDERS))))
-    texture_size: int = spec(256, Choice(TEXTURE_SIZES))
+    texture_size: int = spec(1024, Choice(TEXTURE_SIZES), doc="garment texture side (the skin's is twice, at most "
+                             "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
     age_years: list = spec(factory=lambda: list(ADULT_YEARS), check=Range(0.0, 90.0, "years"),
                            doc="ages drawn from (adults by default; below 18 anny's calibration shapes children)")
 

@@ -49,7 +49,8 @@ class Material:
     kind: ``diffuse`` (Lambertian), ``principled`` (Disney-style; roughness, metallic,
     specular) or ``hair`` (Mitsuba's hair BSDF for curves, coloured by ``melanin``, 0 blond .. 1
     black, and ``redness``, the pheomelanin share, 0 .. 1 red).
-    ``texture`` replaces ``base_color``; ``bump`` (H, W height map, scaled by ``bump_scale``)
+    ``texture`` replaces ``base_color``; ``roughness_map`` (H, W in [0, 1]) replaces
+    ``roughness`` for ``principled``; ``bump`` (H, W height map, scaled by ``bump_scale``)
     or ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded) perturb shading normals.
     """
 
@@ -62,6 +63,7 @@ class Material:
     bump: np.ndarray | None = None
     bump_scale: float = 1.0
     normal_map: np.ndarray | None = None
+    roughness_map: np.ndarray | None = None
     two_sided: bool = True
     melanin: float = 0.3
     redness: float = 0.0
@@ -79,6 +81,11 @@ class Material:
             self.bump = _image("material.bump", self.bump, None)
         if self.normal_map is not None:
             self.normal_map = _image("material.normal_map", self.normal_map, 3)
+        if self.roughness_map is not None:
+            self.roughness_map = _image("material.roughness_map", self.roughness_map, None)
+            if self.roughness_map.min() < 0 or self.roughness_map.max() > 1:
+                raise ConfigError("material.roughness_map", f"values in [{self.roughness_map.min():.3g}, "
+                                  f"{self.roughness_map.max():.3g}]", "give roughness values in [0, 1]")
 
 
 # -- environments ----------------------------------------------------------------------
