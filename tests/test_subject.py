@@ -237,6 +237,23 @@ def test_hair_roots_lie_on_the_scalp_in_their_regions(human):
     assert counts[("bald", "full")] > 0
 
 
+def test_no_hair_hangs_over_the_eyes(human):
+    """For every style, no strand point lies in front of either eye (anny's COCO eye keypoints)
+    within 3 cm across the face: long hair falls beside the face, bangs stop above the eyes."""
+    from synmitsuba.body.hair import STYLES, HairParams, grow_hair
+    from synmitsuba.geometry import frame
+    scalp = human.scalp
+    B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
+    eyes = (human.keypoints()[[1, 2]] - scalp.origin) @ B.T
+    for style in STYLES:
+        s = grow_hair(HairParams(style=style, length=1.3, density=0.4, seed=2), scalp)
+        local = (s.points[s.region < 5].reshape(-1, 3) - scalp.origin) @ B.T
+        for e in eyes:
+            ahead = local[:, 2] > e[2] - 0.01
+            across = np.hypot(local[:, 0] - e[0], local[:, 1] - e[1]) < 0.03
+            assert not (ahead & across).any(), (style, int((ahead & across).sum()))
+
+
 def test_hair_and_accessories_follow_the_head(human):
     sk = human.skeleton
     R = np.broadcast_to(np.eye(3), (len(sk), 3, 3)).copy()

@@ -28,6 +28,7 @@ STYLES = {
     "afro": (0.09, 0.11, 0.10, 0.10, 0.08, -0.2, 1.0),
     "fringe": (0.12, 0.10, 0.07, 0.08, 0.06, 0.8, 0.4),
 }
+HAIRLINE_TOP, BANGS_TOP = 0.45, 0.15  # relative heights over the head centre: hair over the face stops there
 BEARDS = {"none": 0.0, "stubble": 0.004, "goatee": 0.025, "mustache": 0.015, "full": 0.035}
 
 
@@ -135,9 +136,30 @@ def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float, hug: float | Non
     return local @ B + scalp.origin
 
 
-def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6, comb=None) -> np.ndarray:
+FACE_HALF_WIDTH = 0.85  # of the head's half width: hair in front of the face is moved beside it
+
+
+def _clear_face(scalp: ScalpRegions, strands: np.ndarray, top: float) -> np.ndarray:
+    """Strands (N, K, 3) with every point that hangs in front of the face (ahead of the head's
+    centre, below ``top`` (relative height) and within ``FACE_HALF_WIDTH`` of its mid-line)
+    moved sideways to that edge, on its root's side: long hair falls beside the face, as
+    combed hair does, instead of a curtain over the eyes."""
+    B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
+    local = (strands - scalp.origin) @ B.T
+    rx, ry, rz = scalp.radii
+    side = np.where(local[:, :1, 0] >= 0, 1.0, -1.0)  # the root's side, for the whole strand
+    window = (local[..., 2] > 0.2 * rz) & (local[..., 1] < top * ry) & (np.abs(local[..., 0]) < FACE_HALF_WIDTH * rx)
+    window[:, 0] = False  # roots stay where they grew
+    x = np.where(window, side * FACE_HALF_WIDTH * rx, local[..., 0])
+    local = np.concatenate([x[..., None], local[..., 1:]], -1)
+    return local @ B + scalp.origin
+
+
+def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6, comb=None,
+          face_top: float | None = None) -> np.ndarray:
     """Strands that leave the scalp along it (combed towards ``comb``, default down and back),
-    lift off it by ``volume`` and bend down with ``gravity``, staying outside the head."""
+    lift off it by ``volume`` and bend down with ``gravity``, staying outside the head (and,
+    with ``face_top``, out of the face below that relative height: ``_clear_face``)."""
     down = -scalp.up
     if comb is None:  # fall away from the crown, parted away from the face
         radial = roots - scalp.origin
@@ -170,6 +192,9 @@ def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6, comb=
     pts[:, 0] = roots - normals * 0.002  # roots just under the scalp surface
     hug = None if volume >= 0.9 else 0.05 + 0.25 * volume
     pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.003, hug).reshape(len(roots), k - 1, 3)
+    if face_top is not None:
+        pts = _clear_face(scalp, pts, face_top)
+        pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.003).reshape(len(roots), k - 1, 3)
     return pts
 
 
@@ -192,7 +217,8 @@ def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
         roots, normals, _ = _sample_roots(scalp, mask, n, rng)
         lens = L * rng.uniform(0.85, 1.15, n)
         comb = scalp.forward * 0.8 - scalp.up if (r_idx == 0 and params.style == "fringe") else None
-        pts = _grow(scalp, roots, normals, lens, gravity, volume, params.curliness, rng, comb=comb)
+        top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
+        pts = _grow(scalp, roots, normals, lens, gravity, volume, params.curliness, rng, comb=comb, face_top=top)
         radius = np.linspace(0.0016, 0.0008, pts.shape[1])[None].repeat(n, 0) * (1 + 0.5 * volume)
         parts.append(Strands(pts, radius, np.full(n, r_idx)))
     L = BEARDS[params.beard]
