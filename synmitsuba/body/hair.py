@@ -198,8 +198,26 @@ def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6, comb=
     return pts
 
 
-def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
-    """Strands for the style and beard, deterministic from ``params.seed``."""
+BODY_MARGIN = 0.003  # metres kept between a strand and the body's surface
+
+
+def _off_body(strands: np.ndarray, body) -> np.ndarray:
+    """Strands (N, K, 3) with every point but the root lifted ``BODY_MARGIN`` over the body
+    (a ``collide.Surface``: height over the nearest vertex's tangent plane), three rounds for
+    the folds where the nearest vertex changes (neck, shoulders)."""
+    out = strands.copy()
+    rest = out[:, 1:].reshape(-1, 3)
+    for _ in range(3):
+        height, normals = body.depth(rest)
+        push = np.clip(BODY_MARGIN - height, 0.0, None)
+        rest += push[:, None] * normals
+    out[:, 1:] = rest.reshape(len(out), -1, 3)
+    return out
+
+
+def grow_hair(params: HairParams, scalp: ScalpRegions, body=None) -> Strands:
+    """Strands for the style and beard, deterministic from ``params.seed``; with ``body`` (the
+    rest body's ``collide.Surface``) no strand point but its root lies inside the body."""
     rng = np.random.default_rng(params.seed)
     lengths = STYLES[params.style]
     gravity, volume = lengths[5], lengths[6]
@@ -238,7 +256,10 @@ def grow_hair(params: HairParams, scalp: ScalpRegions) -> Strands:
                         rng, comb=-scalp.up)
             radius = np.full(pts.shape[:2], 0.0009)
             parts.append(Strands(pts, radius, np.full(len(roots), 5)))
-    return Strands.concat(parts)
+    hair = Strands.concat(parts)
+    if body is not None and len(hair):
+        hair.points = _off_body(hair.points, body)
+    return hair
 
 
 def hair_material(params: HairParams):

@@ -136,7 +136,7 @@ class LayeredHuman:
         normals = vertex_normals(body.vertices, body.faces)[idx]
         scalp = scalp_regions_from_head(hv, normals, f, centre, [0, 1, 0], [0, 0, 1])
         self.scalp = scalp
-        self.hair: Strands = grow_hair(self.recipe.hair, scalp)
+        self.hair: Strands = grow_hair(self.recipe.hair, scalp, Surface.of(body.vertices, body.faces, self._incidence))
         self.head_bone = sk.index("head")
 
     def _build_accessories(self) -> None:
