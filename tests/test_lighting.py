@@ -109,3 +109,17 @@ def test_emitter_quarters():
     assert quarters([0.2, 1.0]) == [1, 3] and quarters([1.0, 0.0]) == [3, 1]
     assert quarters([5.0, 1.0, 1.0]) == [2, 1, 1] and quarters([9.0, 0.1, 0.1, 0.1]) == [1, 1, 1, 1]
     assert quarters([2.0]) == [4]
+
+
+def test_8bit_maps_are_data_and_8bit_textures_are_srgb(sm):
+    """A uint8 albedo is sRGB-decoded (128 -> 0.2158, the sRGB curve); a uint8 normal, bump or
+    roughness map is only scaled (128 -> 128 / 255): decoding the flat normal (128, 128, 255)
+    would have tilted it."""
+    grey = np.full((4, 4, 3), 128, np.uint8)
+    flat = np.dstack([grey[..., :2], np.full((4, 4), 255, np.uint8)])
+    m = sm.Material(kind="principled", texture=grey, normal_map=flat, roughness_map=grey[..., 0])
+    srgb = ((128 / 255 + 0.055) / 1.055) ** 2.4
+    assert np.allclose(m.texture, srgb, atol=1e-4)
+    assert np.allclose(m.normal_map[..., :2], 128 / 255) and np.allclose(m.normal_map[..., 2], 1.0)
+    assert np.allclose(m.roughness_map, 128 / 255)
+    assert np.allclose(sm.Material(bump=grey[..., 0]).bump, 128 / 255)

@@ -1,7 +1,8 @@
 """Materials, environments and lights: plain data that the renderer turns into Mitsuba dicts.
 
 Colours are linear RGB in [0, 1]. Textures are float32 arrays (H, W, 3) of linear albedo (a
-uint8 array is taken as sRGB-encoded and decoded once, so it stays differentiable downstream).
+uint8 array is taken as sRGB-encoded and decoded once, so it stays differentiable downstream);
+bump, normal and roughness maps are data: a uint8 one is only scaled to [0, 1].
 """
 from __future__ import annotations
 
@@ -27,11 +28,15 @@ def _rgb(name: str, value) -> tuple[float, float, float]:
     return tuple(float(x) for x in arr)
 
 
-def _image(name: str, value, channels: int | None) -> np.ndarray:
+def _image(name: str, value, channels: int | None, colour: bool = False) -> np.ndarray:
+    """A float32 image; uint8 is read as 8-bit [0, 1], sRGB-decoded only for ``colour`` (an
+    albedo): heights, normals and roughness are data, not colours."""
     arr = np.asarray(value)
     if arr.dtype == np.uint8:
-        from synmitsuba._colour import import_colour
-        arr = import_colour().cctf_decoding(arr.astype(np.float32) / 255.0, function="sRGB")
+        arr = arr.astype(np.float32) / 255.0
+        if colour:
+            from synmitsuba._colour import import_colour
+            arr = import_colour().cctf_decoding(arr, function="sRGB")
     arr = np.ascontiguousarray(arr, dtype=np.float32)
     want = "H x W" if channels is None else f"H x W x {channels}"
     ok = arr.ndim == 2 if channels is None else (arr.ndim == 3 and arr.shape[2] == channels)
@@ -76,7 +81,7 @@ class Material:
         for f in ("roughness", "metallic", "specular", "melanin", "redness"):
             setattr(self, f, UNIT(f"material.{f}", getattr(self, f)))
         if self.texture is not None:
-            self.texture = _image("material.texture", self.texture, 3)
+            self.texture = _image("material.texture", self.texture, 3, colour=True)
         if self.bump is not None:
             self.bump = _image("material.bump", self.bump, None)
         if self.normal_map is not None:
@@ -133,7 +138,7 @@ class EnvMap:
 
     def __post_init__(self):
         if isinstance(self.source, np.ndarray):
-            self.source = _image("environment.source", self.source, 3)
+            self.source = _image("environment.source", self.source, 3, colour=True)
         elif not isinstance(self.source, (str, os.PathLike)) or not os.path.isfile(self.source):
             raise ConfigError("environment.file", self.source, "give the path of an existing .exr or .hdr file "
                               "(or an H x W x 3 array)")
