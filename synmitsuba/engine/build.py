@@ -61,18 +61,24 @@ def _mesh(shape: MeshShape):
 
 
 def _curves(shape: CurveShape):
-    """bsplinecurve reads a text file (one 'x y z r' line per control point, blank line between
-    strands); it is written to a temporary file, loaded, and deleted."""
+    """linearcurve reads a text file (one 'x y z r' line per control point, blank line between
+    strands): a file of placeholder strands with the right counts is written (formatting tens
+    of thousands of real strands took a second), loaded, deleted, and the real control points
+    are set through ``mi.traverse``, as every later frame sets them."""
     import mitsuba as mi
-    rows = np.concatenate([shape.points, shape.radius[..., None]], -1).astype(np.float32)
+    n, k = shape.points.shape[:2]
+    strand = "".join(f"0 {j * 1e-3:g} 0 1e-4\n" for j in range(k)) + "\n"
     with tempfile.TemporaryDirectory(prefix="synmitsuba-curves-") as tmp:
         path = os.path.join(tmp, f"{shape.name}.txt")
         with open(path, "w") as fh:
-            for strand in rows:
-                np.savetxt(fh, strand, fmt="%.7g")
-                fh.write("\n")
-        return mi.load_dict({"type": "bsplinecurve", "filename": path, "id": shape.name,
-                             "bsdf": bsdf_dict(shape.material)})
+            fh.write(strand * n)
+        curves = mi.load_dict({"type": "linearcurve", "filename": path, "id": shape.name,
+                               "bsdf": bsdf_dict(shape.material)})
+    params = mi.traverse(curves)
+    rows = np.concatenate([shape.points, shape.radius[..., None]], -1).astype(np.float32)
+    params["control_points"] = mi.Float(rows.ravel())
+    params.update()
+    return curves
 
 
 def environment_dict(env) -> dict | None:
