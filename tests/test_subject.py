@@ -263,9 +263,68 @@ def test_hair_stays_outside_the_body(human):
     body = human.body
     surface = Surface.of(body.vertices, body.faces, human._incidence)
     for style in ("short", "bob", "long", "afro"):
-        s = grow_hair(HairParams(style=style, beard="full", seed=1), human.scalp, surface)
+        s = grow_hair(HairParams(style=style, beard="full", seed=1), human.scalp, surface, human.head["ears"])
         d = signed_distance(body.vertices, body.faces, s.points[:, 1:].reshape(-1, 3))
         assert (d < 0).mean() < 0.002, (style, (d < 0).mean())
+
+
+def test_hair_falls_in_smooth_locks_from_a_part(human):
+    """Guides and their interpolated children: straight styles bend smoothly (no kinks between
+    control points), neighbouring strands stay together down to the tips (locks, not a random
+    spray), strands taper, and with a centre part each top strand falls to its root's side."""
+    from scipy.spatial import cKDTree
+    from synmitsuba.body.hair import HairParams, grow_hair
+    from synmitsuba.geometry import frame
+    scalp = human.scalp
+    B = frame(scalp.forward, scalp.up).T
+    for style in ("long", "bob"):
+        s = grow_hair(HairParams(style=style, curliness=0.0, seed=3), scalp)
+        P = s.points[s.region < 5]
+        u = np.diff(P, axis=1)
+        u /= np.linalg.norm(u, axis=2, keepdims=True)
+        turn = np.degrees(np.arccos(np.clip((u[:, 1:] * u[:, :-1]).sum(2), -1, 1)))
+        assert np.percentile(turn, 95) < 30, (style, np.percentile(turn, 95))  # measured 24, 23
+        _, j = cKDTree(P[:, 0]).query(P[:, 0], k=2)
+        together = np.median(np.linalg.norm(P[:, -1] - P[j[:, 1], -1], axis=1))
+        apart = np.median(np.linalg.norm(P[:, -1] - P[::-1, -1], axis=1))
+        assert together < 0.15 * apart, (style, together, apart)  # measured 0.016 / 0.14, 0.007 / 0.12
+        r = s.radius
+        assert (np.diff(r, axis=1) < 0).all() and np.allclose(r[:, -1] / r[:, 0], 0.33)
+    s = grow_hair(HairParams(style="long", curliness=0.0, seed=3), scalp)  # a centre part
+    local = (s.points[s.region == 1] - scalp.origin) @ B.T
+    root_x, tip_x = local[:, 0, 0], local[:, -1, 0]
+    off_part = np.abs(root_x) > 0.01
+    assert (np.sign(tip_x[off_part]) == np.sign(root_x[off_part])).mean() > 0.97
+
+
+def test_scalp_under_hair_takes_the_hair_colour(human):
+    """``paint_uv`` blends a colour over a face's texture triangle (checked texel by texel
+    against barycentric inside tests) and nowhere else; on a subject, the skin texels under the
+    crown are near the hair's colour while the face keeps the skin tone."""
+    from synmitsuba.body.hair import hair_colour
+    from synmitsuba.body.subject import SCALP_TINT
+    from synmitsuba.body.textures import lab_to_linear_rgb, paint_uv
+    base = np.full((64, 64, 3), 0.5, np.float32)
+    uv = np.array([[0.1, 0.9], [0.6, 0.9], [0.1, 0.4]])  # v up: rows 6.4 .. 38.4
+    out = paint_uv(base, uv, np.array([[0, 1, 2]]), np.array([[1.0, 1.0, 1.0]]), (0.0, 0.0, 1.0), blur=0)
+    c = (np.stack(np.meshgrid(np.arange(64), np.arange(64)), -1) + 0.5) / 64  # texel centres (u, 1 - v)
+    u, v = c[..., 0], 1 - c[..., 1]  # the triangle: u >= 0.1, v <= 0.9, v - u >= 0.3
+    inside = (u > 0.11) & (v < 0.89) & (v - u > 0.31)
+    outside = (u < 0.09) | (v > 0.91) | (v - u < 0.29)
+    assert np.allclose(out[inside], [0, 0, 1]) and np.allclose(out[outside], 0.5)
+    body, tex = human.body, human.parts[0].material.texture
+    size = tex.shape[0]
+
+    def texels(vertices):
+        corners = np.isin(body.faces, vertices)
+        t = body.uv[body.face_uv[corners]]
+        return tex[np.clip(((1 - t[:, 1]) * size).astype(int), 0, size - 1), np.clip((t[:, 0] * size).astype(int), 0, size - 1)]
+    crown = np.flatnonzero(human.head["mask"] & (body.vertices[:, 1] > human.head["centre"][1] + 0.07))
+    skin = lab_to_linear_rgb(human.recipe.skin.lab())
+    hair = (1 - SCALP_TINT) * skin + SCALP_TINT * hair_colour(human.recipe.hair)
+    assert np.median(np.abs(texels(crown) - hair).max(1)) < 0.05
+    nose = np.argmin(np.linalg.norm(body.vertices - human.head["nose"], axis=1))
+    assert np.abs(texels([nose]) - hair).max() > 0.1
 
 
 def test_hair_and_accessories_follow_the_head(human):

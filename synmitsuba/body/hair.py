@@ -29,6 +29,8 @@ STYLES = {
     "fringe": (0.12, 0.10, 0.07, 0.08, 0.06, 0.8, 0.4),
 }
 HAIRLINE_TOP, BANGS_TOP = 0.45, 0.15  # relative heights over the head centre: hair over the face stops there
+K = 10  # control points per strand: enough for a smooth fall and one or two curls
+SUBSTEPS = 4  # growth steps per segment
 BEARDS = {"none": 0.0, "stubble": 0.004, "goatee": 0.025, "mustache": 0.015, "full": 0.035}
 
 
@@ -62,7 +64,8 @@ class ScalpRegions:
     origin: np.ndarray       # head centre
     up: np.ndarray
     forward: np.ndarray
-    radii: np.ndarray        # head proxy ellipsoid semi-axes (right, up, forward)
+    radii: np.ndarray        # head extents from the centre (right, up (the chin's side), forward)
+    skull: np.ndarray        # semi-axes of the skull's proxy ellipsoid (right, up (to the top), forward)
 
 
 def scalp_regions_from_head(vertices, normals, faces, head_center, up, forward) -> ScalpRegions:
@@ -81,10 +84,12 @@ def scalp_regions_from_head(vertices, normals, faces, head_center, up, forward) 
     region[side & (elev > 5) & (elev <= 45)] = 2
     region[back & (elev > -5) & (elev <= 45)] = 3
     region[back & (elev <= -5) & (elev > -40)] = 4
-    region[(np.abs(azim) < 75) & (elev < -20) & (elev > -75) & (z > 0)] = 5
+    beard_top = -12 - 22 * np.cos(np.radians(azim))  # from the sideburns down to above the upper lip
+    region[(np.abs(azim) < 75) & (elev < beard_top) & (elev > -75) & (z > 0)] = 5
     radii = np.array([np.abs(x).max(), np.abs(y).max(), np.abs(z).max()]) * 0.93
+    skull = np.array([np.abs(x).max(), y.max(), np.abs(z).max()]) * 0.93
     return ScalpRegions(np.asarray(vertices, float), np.asarray(normals, float), np.asarray(faces), region,
-                        np.asarray(head_center, float), up, fwd, radii)
+                        np.asarray(head_center, float), up, fwd, radii, skull)
 
 
 @dataclass
@@ -103,7 +108,7 @@ class Strands:
     def concat(parts: list["Strands"]) -> "Strands":
         parts = [p for p in parts if len(p)]
         if not parts:
-            return Strands(np.zeros((0, 6, 3)), np.zeros((0, 6)), np.zeros(0, np.int64))
+            return Strands(np.zeros((0, K, 3)), np.zeros((0, K)), np.zeros(0, np.int64))
         return Strands(np.concatenate([p.points for p in parts]), np.concatenate([p.radius for p in parts]),
                        np.concatenate([p.region for p in parts]))
 
@@ -122,17 +127,12 @@ def _sample_roots(scalp: ScalpRegions, mask_faces: np.ndarray, n: int, rng) -> t
     return pts, nrm / np.linalg.norm(nrm, axis=1, keepdims=True), pick
 
 
-def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float, hug: float | None = None) -> np.ndarray:
-    """Push points out of the head proxy ellipsoid (grown by ``margin``); with ``hug``, points
-    above the ears are also pulled onto the shell at most ``hug`` (relative) above it."""
+def _outside(scalp: ScalpRegions, p: np.ndarray, margin: float) -> np.ndarray:
+    """Points pushed out of the head proxy ellipsoid grown by ``margin``."""
     B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     local = (p - scalp.origin) @ B.T
-    r = np.linalg.norm(local / (scalp.radii + margin), axis=-1, keepdims=True)
-    target = np.maximum(r, 1.0)
-    if hug is not None:
-        above = local[:, 1:2] > -0.2 * scalp.radii[1]
-        target = np.where(above, np.minimum(target, 1.0 + hug), target)
-    local = local / np.maximum(r, 1e-9) * target
+    r = np.linalg.norm(local / (scalp.skull + margin), axis=-1, keepdims=True)
+    local = local / np.maximum(r, 1e-9) * np.maximum(r, 1.0)
     return local @ B + scalp.origin
 
 
@@ -140,61 +140,137 @@ FACE_HALF_WIDTH = 0.85  # of the head's half width: hair in front of the face is
 
 
 def _clear_face(scalp: ScalpRegions, strands: np.ndarray, top: float) -> np.ndarray:
-    """Strands (N, K, 3) with every point that hangs in front of the face (ahead of the head's
-    centre, below ``top`` (relative height) and within ``FACE_HALF_WIDTH`` of its mid-line)
-    moved sideways to that edge, on its root's side: long hair falls beside the face, as
-    combed hair does, instead of a curtain over the eyes."""
+    """Strands (N, K, 3) with every point that hangs in front of the face moved sideways to its
+    edge, on its root's side: long hair falls beside the face, as combed hair does, instead of
+    a curtain over the eyes. The face is an oval ahead of the head's centre: ``FACE_HALF_WIDTH``
+    of the head's half width up to the centre's height, rounding off to ``top`` (relative
+    height) above it, so hair sliding around it frames the face instead of cutting straight
+    across the forehead."""
     B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     local = (strands - scalp.origin) @ B.T
     rx, ry, rz = scalp.radii
     side = np.where(local[:, :1, 0] >= 0, 1.0, -1.0)  # the root's side, for the whole strand
-    window = (local[..., 2] > 0.2 * rz) & (local[..., 1] < top * ry) & (np.abs(local[..., 0]) < FACE_HALF_WIDTH * rx)
+    rise = np.clip(local[..., 1] / (top * ry), 0.0, None)
+    half = FACE_HALF_WIDTH * rx * np.sqrt(np.clip(1.0 - rise ** 2, 0.0, None))
+    window = (local[..., 2] > 0.2 * rz) & (np.abs(local[..., 0]) < half)
     window[:, 0] = False  # roots stay where they grew
-    x = np.where(window, side * FACE_HALF_WIDTH * rx, local[..., 0])
+    x = np.where(window, side * half, local[..., 0])
     local = np.concatenate([x[..., None], local[..., 1:]], -1)
     return local @ B + scalp.origin
 
 
-def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, k=6, comb=None,
-          face_top: float | None = None) -> np.ndarray:
-    """Strands that leave the scalp along it (combed towards ``comb``, default down and back),
-    lift off it by ``volume`` and bend down with ``gravity``, staying outside the head (and,
-    with ``face_top``, out of the face below that relative height: ``_clear_face``)."""
+def _comb(scalp: ScalpRegions, roots: np.ndarray, parting: str, part_x: float) -> np.ndarray:
+    """Direction each root's hair is combed (unnormalised, world): away from the part line on
+    the top of the head (``side``/``centre``: x = ``part_x`` of the head's half width, running
+    from the hairline back to the crown), radially from the crown behind it and on the sides,
+    straight back for ``back``, out from the top for ``crown`` (curls and afros)."""
+    B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
+    right, up, fwd = B
+    local = (roots - scalp.origin) @ B.T / scalp.skull
+    whorl = np.array([part_x, 0.75, -0.45])  # the crown, behind the top
+    radial = local - whorl
+    radial[:, 1] = np.minimum(radial[:, 1], 0.0)
+    away = radial[:, :1] * right + radial[:, 1:2] * up * 0.5 + radial[:, 2:] * fwd
+    if parting in ("side", "centre"):
+        side = np.where(local[:, :1] >= part_x, 1.0, -1.0)
+        ahead = np.clip((local[:, 2:] - whorl[2]) / 0.4, 0.0, 1.0) * (local[:, 1:2] > 0.2)
+        brow = np.clip(local[:, 2:], 0.0, 1.0)  # swept back along the hairline instead of across the forehead
+        away = (1 - ahead) * away / np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-9) + ahead * (
+            side * right * (1 - 0.5 * brow) - (0.25 + 0.8 * brow) * fwd)
+    elif parting == "back":
+        away = np.where(local[:, 1:2] > 0.2, -fwd + 0.3 * np.sign(local[:, :1]) * right * np.abs(local[:, :1]), away)
+    else:  # crown: away from the top of the head
+        away = local[:, :1] * right + local[:, 2:] * fwd + 0.2 * (local[:, 2:] < 0) * -fwd
+    front = np.clip(local[:, 2:], 0, None) * (local[:, 1:2] < 0.2)  # temples: towards the back, off the face
+    return away - 1.2 * front * fwd - 0.3 * up
+
+
+def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, comb, body=None, face_top=None) -> np.ndarray:
+    """Guide strands (N, K, 3) grown step by step: leaving the scalp along ``comb`` lifted by
+    ``volume``, bending down with ``gravity`` (up and out when negative) and, the flatter the
+    style, towards the head; each step slides over the head (``body``, a ``collide.Surface``,
+    else the proxy ellipsoid) at a per-strand height (the hair's thickness) and, with
+    ``face_top``, around the face (``_clear_face``) instead of across it."""
     down = -scalp.up
-    if comb is None:  # fall away from the crown, parted away from the face
-        radial = roots - scalp.origin
-        radial -= np.outer(radial @ scalp.up, scalp.up)
-        radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
-        front = np.clip(radial @ scalp.forward, 0, None)[:, None]
-        radial = radial - front * scalp.forward * 1.2
-        comb = radial + 0.5 * down
-    else:
-        comb = np.broadcast_to(comb, roots.shape)
     tangent = comb - normals * (normals * comb).sum(1, keepdims=True)
     tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-9)
-    seg = lengths[:, None] / (k - 1)
-    pts = np.empty((len(roots), k, 3))
-    pts[:, 0] = roots
-    lift = 0.05 + 0.3 * volume
-    for j in range(1, k):
-        s = j / (k - 1)
-        g = np.clip(gravity, -1, 1) * s
-        d = tangent * (1 - abs(g)) + normals * lift * (1 - s) + down * max(g, 0) + normals * max(-g, 0)
+    seg = lengths[:, None] / (K - 1)
+    layer = 0.002 + 0.012 * volume * rng.random((len(roots), 1))  # strands lie on one another
+    d = tangent + normals * (0.05 + 0.3 * volume)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    pts = np.empty((len(roots), K, 3))
+    pts[:, 0] = p = roots
+    hug = 0.25 * max(0.0, 1.0 - volume)
+    front = ((roots - scalp.origin) @ scalp.forward > 0) & (rng.random(len(roots)) < 0.5)
+    fall = np.where(front, 1.0, -1.0)[:, None] * scalp.forward  # hair reaching a shoulder falls ahead of it or behind
+    seg = seg / SUBSTEPS  # small steps: a long strand's first segment would cut through the head
+    for j in range(1, (K - 1) * SUBSTEPS + 1):
+        inward = scalp.origin - p
+        above = np.clip(1.0 - inward @ scalp.up / 0.05, 0.0, 1.0)[:, None]  # the head's upper half only
+        inward /= np.maximum(np.linalg.norm(inward, axis=1, keepdims=True), 1e-9)
+        d = d + (0.45 * (gravity * down if gravity >= 0 else -gravity * normals) + hug * above * inward) / SUBSTEPS
         d /= np.linalg.norm(d, axis=1, keepdims=True)
-        pts[:, j] = pts[:, j - 1] + d * seg
+        _, n, blocked = _over_head(scalp, p + d * seg, layer, body)
+        into = np.minimum((d * n).sum(1, keepdims=True), 0.0) * blocked
+        slide = d - into * n + (0.05 * tangent + 0.5 * (1 - above) * fall) * blocked  # along the head, off a shoulder
+        d = slide / np.maximum(np.linalg.norm(slide, axis=1, keepdims=True), 1e-12)
+        p, _, _ = _over_head(scalp, p + d * seg, layer, body)
+        if face_top is not None:
+            q = _clear_face(scalp, np.stack([roots, p], 1), face_top)[:, 1]
+            if (q != p).any():
+                step = q - (p - d * seg)
+                d = step / np.maximum(np.linalg.norm(step, axis=1, keepdims=True), 1e-12)
+                p = q
+        if j % SUBSTEPS == 0:
+            pts[:, j // SUBSTEPS] = p
     if curl > 0:
-        s = np.linspace(0, 1, k)[None, :]
+        s = np.linspace(0, 1, K)[None, :]
         phase = rng.uniform(0, 2 * np.pi, (len(roots), 1))
-        a = 2 * np.pi * (1 + 4 * curl) * s + phase
+        a = 2 * np.pi * (0.5 + 1.5 * curl) * s + phase
         side = np.cross(tangent, normals)
-        amp = ((0.003 + 0.01 * curl) * np.minimum(1, lengths / 0.05))[:, None, None] * (s[..., None] > 0)
+        amp = ((0.003 + 0.012 * curl) * np.minimum(1, lengths / 0.05))[:, None, None] * np.sqrt(s)[..., None]
         pts = pts + amp * (np.cos(a)[..., None] * side[:, None] + np.sin(a)[..., None] * normals[:, None])
-    pts[:, 0] = roots - normals * 0.002  # roots just under the scalp surface
-    hug = None if volume >= 0.9 else 0.05 + 0.25 * volume
-    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.003, hug).reshape(len(roots), k - 1, 3)
-    if face_top is not None:
-        pts = _clear_face(scalp, pts, face_top)
-        pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.003).reshape(len(roots), k - 1, 3)
+    return pts
+
+
+def _over_head(scalp, p, layer, body=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points ``p`` (N, 3) lifted to at least ``layer`` (N, 1) over the head (over the body
+    surface when given, else over the proxy ellipsoid), the surface normal there and which
+    points were lifted (N, 1)."""
+    if body is not None:
+        height, normal = body.depth(p)
+        lift = np.clip(layer[:, 0] - height, 0, None)[:, None]
+        return p + lift * normal, normal, lift > 0
+    B = frame(scalp.forward, scalp.up).T
+    local = (p - scalp.origin) @ B.T
+    r = np.linalg.norm(local / (scalp.skull + layer), axis=1, keepdims=True)
+    normal = (local / (scalp.skull + layer) ** 2) @ B
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+    return np.where(r < 1, (local / np.maximum(r, 1e-9)) @ B + scalp.origin, p), normal, r < 1
+
+
+def _children(guide_roots, guides, roots, key_g, key_c, clump, frizz, curl, rng) -> np.ndarray:
+    """Strands (N, K, 3) rooted at ``roots``: the shape of their three nearest guides (inverse
+    squared distance weights over ``key_*``, the roots with the part side as an extra
+    coordinate, so no shape is averaged across the part), gathered towards the nearest guide
+    towards the tip by ``clump``, with a per-strand length and a little ``frizz``."""
+    from scipy.spatial import cKDTree
+    k = min(3, len(guides))
+    dist, near = cKDTree(key_g).query(key_c, k=k)
+    dist, near = dist.reshape(len(roots), k), near.reshape(len(roots), k)
+    w = 1.0 / (dist + 0.004) ** 2
+    w /= w.sum(1, keepdims=True)
+    shape = np.einsum("nk,nkja->nja", w, guides[near] - guide_roots[near][:, :, None])
+    s = np.linspace(0, 1, K)[None, :, None]
+    pts = roots[:, None] + shape * rng.uniform(0.8, 1.0, (len(roots), 1, 1))
+    g = near[:, 0]
+    clumped = guides[g] + (roots - guide_roots[g])[:, None] * 0.35
+    gather = clump * rng.uniform(0.6, 1.0, (len(roots), 1, 1)) * s ** 1.5
+    pts = pts + gather * (clumped - pts)
+    wobble = rng.normal(0, 1, (len(roots), 2, 3))  # a low bend and per-point noise, both growing to the tip
+    scale = np.clip(np.linalg.norm(np.diff(pts, axis=1), axis=2).sum(1) / 0.2, 0.05, 1.0)[:, None, None]  # short hair: less
+    pts = pts + scale * (s * wobble[:, :1] * 0.004 * frizz + s ** 2 * rng.normal(0, 1, pts.shape) * (0.0015 + 0.006 * curl))
+    pts[:, 0] = roots
     return pts
 
 
@@ -203,63 +279,161 @@ BODY_MARGIN = 0.003  # metres kept between a strand and the body's surface
 
 def _off_body(strands: np.ndarray, body) -> np.ndarray:
     """Strands (N, K, 3) with every point but the root lifted ``BODY_MARGIN`` over the body
-    (a ``collide.Surface``: height over the nearest vertex's tangent plane), three rounds for
-    the folds where the nearest vertex changes (neck, shoulders)."""
+    (a ``collide.Surface``: height over the nearest vertex's tangent plane); the points that
+    moved are checked again, four rounds in all, for the folds where the nearest vertex
+    changes (neck, shoulders)."""
     out = strands.copy()
     rest = out[:, 1:].reshape(-1, 3)
-    for _ in range(3):
-        height, normals = body.depth(rest)
+    todo = np.arange(len(rest))
+    for _ in range(4):
+        height, normals = body.depth(rest[todo])
         push = np.clip(BODY_MARGIN - height, 0.0, None)
-        rest += push[:, None] * normals
+        rest[todo] += push[:, None] * normals
+        todo = todo[push > 0]
+        if not len(todo):
+            break
     out[:, 1:] = rest.reshape(len(out), -1, 3)
     return out
 
 
-def grow_hair(params: HairParams, scalp: ScalpRegions, body=None) -> Strands:
+EAR_CLEARANCE = 0.035  # metres kept between a strand point and an ear keypoint
+
+
+def _over_ears(strands: np.ndarray, ears: np.ndarray) -> np.ndarray:
+    """Strand points (roots aside) within ``EAR_CLEARANCE`` of an ear keypoint moved out to it,
+    away from the ear: the ear is a thin fold whose inside the tangent-plane test of
+    ``_off_body`` cannot see, so hair lies over it instead of through it."""
+    out = strands.copy()
+    rest = out[:, 1:]
+    for ear in np.asarray(ears, float).reshape(-1, 3):
+        rel = rest - ear
+        dist = np.linalg.norm(rel, axis=-1, keepdims=True)
+        rest[...] = np.where(dist < EAR_CLEARANCE, ear + rel / np.maximum(dist, 1e-9) * EAR_CLEARANCE, rest)
+    return out
+
+
+def _part_side(scalp: ScalpRegions, roots: np.ndarray, parting: str, part_x: float) -> np.ndarray:
+    """(N, 1): -1 or +1 on either side of the part line on the top of the head, else 0."""
+    if parting not in ("side", "centre"):
+        return np.zeros((len(roots), 1))
+    B = frame(scalp.forward, scalp.up).T
+    local = (roots - scalp.origin) @ B.T / scalp.skull
+    return np.where(local[:, :1] >= part_x, 1.0, -1.0) * (local[:, 1:2] > 0.2)
+
+
+def _strands(scalp, mask, n, length, look, rng, comb=None, keep=None, body=None, face_top=None) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` strands (and their root normals) rooted on the scalp faces ``mask``: guides grown
+    one by one (one per ``GUIDE_SHARE`` strands), children interpolated between them.
+    ``look``: (gravity, volume, curl, clump, frizz, parting, part_x); ``keep`` filters roots."""
+    gravity, volume, curl, clump, frizz, parting, part_x = look
+    g_roots, g_normals, _ = _sample_roots(scalp, mask, max(6, int(n * GUIDE_SHARE)), rng)
+    roots, normals, _ = _sample_roots(scalp, mask, n, rng)
+    if keep is not None:
+        g_keep, c_keep = keep(g_roots), keep(roots)
+        if g_keep.sum() < 3 or not c_keep.any():
+            return np.zeros((0, K, 3)), np.zeros((0, 3))
+        g_roots, g_normals, roots, normals = g_roots[g_keep], g_normals[g_keep], roots[c_keep], normals[c_keep]
+    direction = _comb(scalp, g_roots, parting, part_x) if comb is None else np.broadcast_to(comb, g_roots.shape)
+    lengths = length * rng.uniform(0.9, 1.1, len(g_roots))
+    guides = _grow(scalp, g_roots, g_normals, lengths, gravity, volume, curl, rng, direction, body, face_top)
+
+    def key(r):
+        return np.concatenate([r, 0.1 * _part_side(scalp, r, parting, part_x)], 1)
+    pts = _children(g_roots, guides, roots, key(g_roots), key(roots), clump, frizz, curl, rng)
+    return pts, normals
+
+
+GUIDE_SHARE = 1 / 40          # guides per strand
+STRANDS = (6000, 20000)        # scalp strands at density 0 and 1
+ROOT_RADIUS = 0.0004           # metres at the root; strands taper to a third of it at the tip
+# style -> parting (side, centre, back: swept back, crown: out from the top) and clumping (0 loose .. 1 locks)
+PARTING = {"bald": ("back", 0.0), "buzz": ("back", 0.1), "short": ("side", 0.3), "crew": ("back", 0.3),
+           "bob": ("centre", 0.45), "shoulder": ("side", 0.5), "long": ("centre", 0.5), "curly": ("crown", 0.7),
+           "afro": ("crown", 0.15), "fringe": ("side", 0.4)}
+
+
+def _taper(n: int, scale: float = 1.0) -> np.ndarray:
+    return np.broadcast_to(ROOT_RADIUS * scale * np.linspace(1.0, 0.33, K), (n, K)).copy()
+
+
+def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> Strands:
     """Strands for the style and beard, deterministic from ``params.seed``; with ``body`` (the
-    rest body's ``collide.Surface``) no strand point but its root lies inside the body."""
+    rest body's ``collide.Surface``) no strand point but its root lies inside the body, and
+    with ``ears`` (2, 3) keypoints none passes through an ear."""
     rng = np.random.default_rng(params.seed)
-    lengths = STYLES[params.style]
-    gravity, volume = lengths[5], lengths[6]
+    table = STYLES[params.style]
+    gravity, volume = table[5], table[6]
+    parting, clump = PARTING[params.style]
+    part_x = {"side": float(rng.choice([-0.4, 0.4])), "centre": 0.0}.get(parting, 0.0)
+    look = (gravity, volume, params.curliness, clump, 0.3 + params.curliness, parting, part_x)
     face_region = scalp.region[scalp.faces]
     area = triangle_areas(scalp.vertices[scalp.faces])
     scalp_area = area[(face_region[:, 0] >= 0) & (face_region[:, 0] < 5) & (face_region == face_region[:, :1]).all(1)].sum()
     parts = []
-    n_total = int(1500 + 3500 * params.density)
+    n_total = int(STRANDS[0] + (STRANDS[1] - STRANDS[0]) * params.density)
+    top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
     for r_idx in range(5):
-        L = lengths[r_idx] * params.length
+        L = table[r_idx] * params.length
         mask = (face_region == r_idx).all(1)
         if L <= 0 or not mask.any():
             continue
-        n = max(20, int(n_total * area[mask].sum() / max(scalp_area, 1e-9)))
-        roots, normals, _ = _sample_roots(scalp, mask, n, rng)
-        lens = L * rng.uniform(0.85, 1.15, n)
+        n = max(40, int(n_total * area[mask].sum() / max(scalp_area, 1e-9)))
         comb = scalp.forward * 0.8 - scalp.up if (r_idx == 0 and params.style == "fringe") else None
-        top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
-        pts = _grow(scalp, roots, normals, lens, gravity, volume, params.curliness, rng, comb=comb, face_top=top)
-        radius = np.linspace(0.0016, 0.0008, pts.shape[1])[None].repeat(n, 0) * (1 + 0.5 * volume)
-        parts.append(Strands(pts, radius, np.full(n, r_idx)))
+        pts, normals = _strands(scalp, mask, n, L, look, rng, comb=comb, body=body, face_top=top)
+        pts = _finish(scalp, pts, normals, top)
+        parts.append(Strands(pts, _taper(len(pts), 1 + 0.3 * volume), np.full(len(pts), r_idx)))
     L = BEARDS[params.beard]
     mask = (face_region == 5).all(1)
     if L > 0 and mask.any():
-        n = int(400 + 800 * params.density)
-        roots, normals, _ = _sample_roots(scalp, mask, n, rng)
-        if params.beard in ("goatee", "mustache"):  # keep a narrow band around the mouth
+        def keep(roots):  # goatee and mustache: a narrow band around the mouth
             rel = roots - scalp.origin
             x = rel @ np.cross(scalp.up, scalp.forward)
-            keep = np.abs(x) < (0.03 if params.beard == "goatee" else 0.035)
+            ok = np.abs(x) < (0.03 if params.beard == "goatee" else 0.035)
             if params.beard == "mustache":
-                keep &= (rel @ scalp.up) > np.percentile(rel @ scalp.up, 60)
-            roots, normals = roots[keep], normals[keep]
-        if len(roots):
-            pts = _grow(scalp, roots, normals, L * rng.uniform(0.8, 1.2, len(roots)), 0.6, 0.2, params.curliness * 0.5,
-                        rng, comb=-scalp.up)
-            radius = np.full(pts.shape[:2], 0.0009)
-            parts.append(Strands(pts, radius, np.full(len(roots), 5)))
+                ok &= (rel @ scalp.up) > np.percentile(all_up, 60)
+            return ok
+        all_up = (scalp.vertices[np.unique(scalp.faces[mask])] - scalp.origin) @ scalp.up
+        beard_look = (0.6, 0.2, params.curliness * 0.5, 0.2, 0.3, "back", 0.0)
+        pts, normals = _strands(scalp, mask, int(1500 + 3000 * params.density), L, beard_look, rng, comb=-scalp.up,
+                                keep=None if params.beard in ("stubble", "full") else keep, body=body)
+        if len(pts):
+            pts = _finish(scalp, pts, normals, None)
+            parts.append(Strands(pts, _taper(len(pts), 0.6), np.full(len(pts), 5)))
     hair = Strands.concat(parts)
+    if ears is not None and len(hair):
+        hair.points = _over_ears(hair.points, ears)
     if body is not None and len(hair):
         hair.points = _off_body(hair.points, body)
     return hair
+
+
+def _finish(scalp, pts, normals, face_top) -> np.ndarray:
+    """Roots 2 mm under the scalp, the rest out of the head's proxy and, with ``face_top``, out
+    of the face below that relative height (``_clear_face``)."""
+    pts[:, 0] -= normals * 0.002
+    if face_top is not None:
+        pts = _clear_face(scalp, pts, face_top)
+    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.002).reshape(len(pts), K - 1, 3)
+    return pts
+
+
+def hair_colour(params: HairParams) -> np.ndarray:
+    """Linear RGB of a mass of this hair seen diffusely: half the transmittance through two fibre
+    diameters under the absorption of ``hair_material`` (Mitsuba's melanin model: eumelanin and
+    pheomelanin absorption per unit concentration), used to tint the scalp under the hair."""
+    eumelanin, pheomelanin = 8.0 * params.melanin, 0.2 + 2.8 * params.redness
+    sigma_a = eumelanin * np.array([0.419, 0.697, 1.37]) + pheomelanin * np.array([0.187, 0.4, 1.05])
+    return 0.5 * np.exp(-2.0 * sigma_a)
+
+
+def root_cover(vertices: np.ndarray, roots: np.ndarray, radius: float = 0.006) -> np.ndarray:
+    """(V,) in [0, 1]: how densely strands are rooted around each vertex (3 roots within
+    ``radius`` count as covered): where the scalp lies under hair."""
+    from scipy.spatial import cKDTree
+    if not len(roots):
+        return np.zeros(len(vertices))
+    counts = cKDTree(roots).query_ball_point(vertices, radius, return_length=True)
+    return np.clip(np.asarray(counts) / 3.0, 0.0, 1.0)
 
 
 def hair_material(params: HairParams):

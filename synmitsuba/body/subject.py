@@ -13,10 +13,10 @@ from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_
 from synmitsuba.body.binding import bind
 from synmitsuba.body.collide import GarmentCollider, Surface, incidence
 from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
-from synmitsuba.body.hair import Strands, grow_hair, hair_material, scalp_regions_from_head
+from synmitsuba.body.hair import Strands, grow_hair, hair_colour, hair_material, root_cover, scalp_regions_from_head
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
-from synmitsuba.body.textures import garment_material, lab_to_linear_rgb, skin_material
+from synmitsuba.body.textures import garment_material, lab_to_linear_rgb, paint_uv, skin_material
 from synmitsuba.body.topology import split_at_seams
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import vertex_normals
@@ -60,6 +60,10 @@ class _Part:
         a quarter of the dense product's time, with the same result."""
         from scipy import sparse
         return sparse.csr_matrix(self.weights)
+
+
+SCALP_TINT = 0.9  # how far the skin under hair takes the hair's colour
+BEARD_TINT = 0.5  # and under a beard: a shadow, the skin still shows
 
 
 def skin_size(texture_size: int) -> int:
@@ -112,6 +116,7 @@ class LayeredHuman:
         self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
         self._build_accessories()
+        self._tint_scalp()
         self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
 
     # -- construction ---------------------------------------------------------------------
@@ -136,7 +141,8 @@ class LayeredHuman:
         normals = vertex_normals(body.vertices, body.faces)[idx]
         scalp = scalp_regions_from_head(hv, normals, f, centre, [0, 1, 0], [0, 0, 1])
         self.scalp = scalp
-        self.hair: Strands = grow_hair(self.recipe.hair, scalp, Surface.of(body.vertices, body.faces, self._incidence))
+        self.hair: Strands = grow_hair(self.recipe.hair, scalp, Surface.of(body.vertices, body.faces, self._incidence),
+                                       self.head["ears"])
         self.head_bone = sk.index("head")
 
     def _build_accessories(self) -> None:
@@ -152,6 +158,25 @@ class LayeredHuman:
             if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
                 keep = ~acc.under_cap(self.head, self.hair.points[:, 0])
                 self.hair = Strands(self.hair.points[keep], self.hair.radius[keep], self.hair.region[keep])
+            if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
+                gap, _ = cKDTree(v).query(self.hair.points[:, 0])
+                keep = (self.hair.region < 5) | (gap > 0.015)
+                self.hair = Strands(self.hair.points[keep], self.hair.radius[keep], self.hair.region[keep])
+
+    def _tint_scalp(self) -> None:
+        """The skin under the hair takes the hair's colour, ``SCALP_TINT`` of the way (``BEARD_TINT``
+        under a beard): real hair is dense enough that no skin shows between strands; ours is not."""
+        if not len(self.hair):
+            return
+        body, mat = self.body, self.parts[0].material
+        head = np.flatnonzero(self.head["mask"])
+        cover = np.zeros(len(body.vertices))
+        beard = self.hair.region == 5
+        cover[head] = np.maximum(SCALP_TINT * root_cover(body.vertices[head], self.hair.points[~beard, 0]),
+                                 BEARD_TINT * root_cover(body.vertices[head], self.hair.points[beard, 0]))
+        texture = paint_uv(mat.texture, body.uv, body.face_uv, cover[body.faces], hair_colour(self.recipe.hair),
+                           blur=mat.texture.shape[0] / 512)
+        self.parts[0].material = dataclasses.replace(mat, texture=texture)
 
     # -- posing ---------------------------------------------------------------------------
     @property

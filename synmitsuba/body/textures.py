@@ -318,6 +318,26 @@ def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarr
     return img.astype(np.float32)
 
 
+def paint_uv(image: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, weight: np.ndarray, colour,
+             blur: float = 1.5) -> np.ndarray:
+    """``image`` (S, S, 3) with ``colour`` blended in by per-corner ``weight`` (F, 3) rasterised
+    over each face's texture triangle (``uv`` (T, 2), v up; ``face_uv`` (F, 3)), softened by a
+    Gaussian of ``blur`` texels: e.g. the scalp under hair takes the hair's colour, so gaps
+    between strands read as hair, not bare skin."""
+    from PIL import Image, ImageDraw, ImageFilter
+    size = image.shape[0]
+    mask = Image.new("L", (size, size), 0)
+    draw = ImageDraw.Draw(mask)
+    painted = np.flatnonzero(weight.max(1) > 0)
+    px = np.stack([uv[:, 0] * size, (1.0 - uv[:, 1]) * size], 1)
+    for f in painted:
+        draw.polygon([tuple(px[i]) for i in face_uv[f]], fill=int(round(255 * weight[f].mean())))
+    if blur > 0:
+        mask = mask.filter(ImageFilter.GaussianBlur(blur))
+    m = np.asarray(mask, np.float32)[..., None] / 255.0
+    return (image * (1 - m) + np.asarray(colour, np.float32) * m).astype(np.float32)
+
+
 SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "lips": 0.3}  # oilier face, moist lips (a mild sheen)
 
 
