@@ -1,9 +1,12 @@
-"""Strand hair as Mitsuba B-spline curves, rooted on scalp regions and shaped by style.
+"""Strand hair as Mitsuba curves, rooted on scalp regions and shaped by style.
 
 Scalp regions (fringe, top, temporal, occipital, lower_back, and the beard area) are labelled
 geometrically in a head frame (origin at the head centre, up, forward). Each style sets a
-length per region, how strands fall (gravity), and curliness; strands are pushed out of a head
-proxy ellipsoid so they never enter the head. Strands are rigid with the head bone.
+length per region, how strands fall (gravity), their volume, a parting and how much they clump.
+A few hundred guide strands are grown in small steps that slide over the rest body and around
+the face; thousands of thin, tapered children take the shape of their nearest guides (never
+across the part), gathered towards one guide's tip in locks. Strands are rigid with the head
+bone; the scalp under them is tinted with the hair's colour (``hair_colour``, ``root_cover``).
 """
 from __future__ import annotations
 
@@ -344,8 +347,8 @@ def _strands(scalp, mask, n, length, look, rng, comb=None, keep=None, body=None,
 
 
 GUIDE_SHARE = 1 / 40          # guides per strand
-STRANDS = (6000, 20000)        # scalp strands at density 0 and 1
-ROOT_RADIUS = 0.0004           # metres at the root; strands taper to a third of it at the tip
+STRANDS = (4000, 12000)        # scalp strands at density 0 and 1
+ROOT_RADIUS = 0.0005           # metres at the root; strands taper to a third of it at the tip
 # style -> parting (side, centre, back: swept back, crown: out from the top) and clumping (0 loose .. 1 locks)
 PARTING = {"bald": ("back", 0.0), "buzz": ("back", 0.1), "short": ("side", 0.3), "crew": ("back", 0.3),
            "bob": ("centre", 0.45), "shoulder": ("side", 0.5), "long": ("centre", 0.5), "curly": ("crown", 0.7),
@@ -366,15 +369,16 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     parting, clump = PARTING[params.style]
     part_x = {"side": float(rng.choice([-0.4, 0.4])), "centre": 0.0}.get(parting, 0.0)
     look = (gravity, volume, params.curliness, clump, 0.3 + params.curliness, parting, part_x)
-    face_region = scalp.region[scalp.faces]
+    corner = scalp.region[scalp.faces]  # a face belongs to the region of two of its corners: no bald seams
+    face_region = np.where(corner[:, 1] == corner[:, 2], corner[:, 1], corner[:, 0])
     area = triangle_areas(scalp.vertices[scalp.faces])
-    scalp_area = area[(face_region[:, 0] >= 0) & (face_region[:, 0] < 5) & (face_region == face_region[:, :1]).all(1)].sum()
+    scalp_area = area[(face_region >= 0) & (face_region < 5)].sum()
     parts = []
     n_total = int(STRANDS[0] + (STRANDS[1] - STRANDS[0]) * params.density)
     top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
     for r_idx in range(5):
         L = table[r_idx] * params.length
-        mask = (face_region == r_idx).all(1)
+        mask = face_region == r_idx
         if L <= 0 or not mask.any():
             continue
         n = max(40, int(n_total * area[mask].sum() / max(scalp_area, 1e-9)))
@@ -383,7 +387,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
         pts = _finish(scalp, pts, normals, top)
         parts.append(Strands(pts, _taper(len(pts), 1 + 0.3 * volume), np.full(len(pts), r_idx)))
     L = BEARDS[params.beard]
-    mask = (face_region == 5).all(1)
+    mask = face_region == 5
     if L > 0 and mask.any():
         def keep(roots):  # goatee and mustache: a narrow band around the mouth
             rel = roots - scalp.origin
@@ -394,7 +398,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
             return ok
         all_up = (scalp.vertices[np.unique(scalp.faces[mask])] - scalp.origin) @ scalp.up
         beard_look = (0.6, 0.2, params.curliness * 0.5, 0.2, 0.3, "back", 0.0)
-        pts, normals = _strands(scalp, mask, int(1500 + 3000 * params.density), L, beard_look, rng, comb=-scalp.up,
+        pts, normals = _strands(scalp, mask, int(800 + 1600 * params.density), L, beard_look, rng, comb=-scalp.up,
                                 keep=None if params.beard in ("stubble", "full") else keep, body=body)
         if len(pts):
             pts = _finish(scalp, pts, normals, None)
@@ -411,9 +415,9 @@ def _finish(scalp, pts, normals, face_top) -> np.ndarray:
     """Roots 2 mm under the scalp, the rest out of the head's proxy and, with ``face_top``, out
     of the face below that relative height (``_clear_face``)."""
     pts[:, 0] -= normals * 0.002
+    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.002).reshape(len(pts), K - 1, 3)
     if face_top is not None:
         pts = _clear_face(scalp, pts, face_top)
-    pts[:, 1:] = _outside(scalp, pts[:, 1:].reshape(-1, 3), 0.002).reshape(len(pts), K - 1, 3)
     return pts
 
 
@@ -426,7 +430,7 @@ def hair_colour(params: HairParams) -> np.ndarray:
     return 0.5 * np.exp(-2.0 * sigma_a)
 
 
-def root_cover(vertices: np.ndarray, roots: np.ndarray, radius: float = 0.006) -> np.ndarray:
+def root_cover(vertices: np.ndarray, roots: np.ndarray, radius: float = 0.008) -> np.ndarray:
     """(V,) in [0, 1]: how densely strands are rooted around each vertex (3 roots within
     ``radius`` count as covered): where the scalp lies under hair."""
     from scipy.spatial import cKDTree
