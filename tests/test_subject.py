@@ -659,3 +659,21 @@ def test_every_body_and_garment_parameter_changes_the_subject():
             target = e["garments"][1]["kind"]
         other = {p.name: p.vertices for p in sm.build_subject(sm.SubjectRecipe.from_dict(e)).pose() if not p.is_curves}
         assert other[target].shape != ref[target].shape or not np.allclose(other[target], ref[target]), (section, key)
+
+
+def test_hair_styles_and_beards_follow_the_documented_table():
+    """2,000 draws per person kind: style and beard frequencies match ``STYLE_ODDS`` and
+    ``beard_odds`` (chi-square, p > 0.001); women and people under 18 never get a beard."""
+    from scipy.stats import chisquare
+    from synmitsuba.body.hair import BEARDS, STYLE_ODDS, STYLES, beard_odds, sample_hair
+    rng = np.random.default_rng(5)
+    for sex, years in (("male", 25.0), ("male", 60.0), ("female", 40.0), ("male", 12.0)):
+        draws = [sample_hair(rng, sex, years) for _ in range(2000)]
+        styles = np.array([list(STYLES).index(h.style) for h in draws])
+        beards = np.array([list(BEARDS).index(h.beard) for h in draws])
+        assert chisquare(np.bincount(styles, minlength=len(STYLES)), 2000 * np.array(STYLE_ODDS[sex])).pvalue > 1e-3
+        odds = np.array(beard_odds(sex, years))
+        if sex == "female" or years < 18:
+            assert (beards == 0).all()
+        else:
+            assert chisquare(np.bincount(beards, minlength=len(BEARDS)), 2000 * odds).pvalue > 1e-3

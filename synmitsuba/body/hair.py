@@ -49,9 +49,27 @@ class HairParams(Params):
     seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
 
-def sample_hair(rng: np.random.Generator, beard_allowed: bool = True) -> HairParams:
-    style = str(rng.choice(list(STYLES)))
-    beard = str(rng.choice(list(BEARDS), p=[0.6, 0.1, 0.1, 0.1, 0.1])) if beard_allowed else "none"
+# Who wears what: our rough prior (not survey data), style odds per sex in ``STYLES`` order, and
+# beard odds for men by age in years (none, stubble, goatee, mustache, full); women and people
+# under 18 get no beard.
+STYLE_ODDS = {"male": (0.08, 0.14, 0.26, 0.20, 0.02, 0.06, 0.05, 0.08, 0.06, 0.05),
+              "female": (0.005, 0.015, 0.08, 0.02, 0.20, 0.24, 0.22, 0.10, 0.05, 0.07)}
+BEARD_ODDS = ((18, (0.55, 0.20, 0.08, 0.04, 0.13)),   # from 18 years
+              (30, (0.50, 0.18, 0.10, 0.06, 0.16)),   # from 30
+              (50, (0.55, 0.10, 0.08, 0.12, 0.15)))   # from 50
+
+
+def beard_odds(sex: str, years: float) -> tuple:
+    """``BEARDS`` probabilities for a person of this sex and age."""
+    if sex != "male" or years < 18:
+        return (1.0, 0.0, 0.0, 0.0, 0.0)
+    return [odds for start, odds in BEARD_ODDS if years >= start][-1]
+
+
+def sample_hair(rng: np.random.Generator, sex: str = "male", years: float = 35.0) -> HairParams:
+    """Hair for a person: style by ``STYLE_ODDS`` of the sex, beard by ``beard_odds``."""
+    style = str(rng.choice(list(STYLES), p=STYLE_ODDS[sex]))
+    beard = str(rng.choice(list(BEARDS), p=beard_odds(sex, years)))
     return HairParams(style=style, beard=beard, length=round(float(rng.uniform(0.7, 1.3)), 3),
                       curliness=round(float(rng.uniform(0.6, 1.0) if style in ("curly", "afro") else rng.uniform(0, 0.4)), 3),
                       density=round(float(rng.uniform(0.3, 1.0)), 3), melanin=round(float(rng.beta(2, 1.5)), 3),

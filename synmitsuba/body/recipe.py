@@ -170,7 +170,9 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     if (draw if cfg.shoes is None else cfg.shoes) and "shoes" not in outfit:
         outfit.append("shoes")
     garments = [sample_garment(k, rng) for k in outfit]
-    hair = sample_hair(rng, beard_allowed=pheno["gender"] < 0.5)  # anny: gender 0 is male, 1 female
+    anny_anchors, year_anchors = shape_calibration()["age"]
+    hair = sample_hair(rng, "female" if pheno["gender"] >= 0.5 else "male",  # anny: gender 0 is male, 1 female
+                       float(np.interp(pheno["age"], anny_anchors, year_anchors)))
     if cfg.hair_style is not None:
         hair.style = cfg.hair_style
     accessories = sample_accessories(rng)
