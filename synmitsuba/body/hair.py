@@ -441,11 +441,18 @@ def _finish(scalp, pts, normals, face_top) -> np.ndarray:
 
 def hair_colour(params: HairParams) -> np.ndarray:
     """Linear RGB of a mass of this hair seen diffusely: half the transmittance through two fibre
-    diameters under the absorption of ``hair_material`` (Mitsuba's melanin model: eumelanin and
-    pheomelanin absorption per unit concentration), used to tint the scalp under the hair."""
-    eumelanin, pheomelanin = 8.0 * params.melanin, 0.2 + 2.8 * params.redness
-    sigma_a = eumelanin * np.array([0.419, 0.697, 1.37]) + pheomelanin * np.array([0.187, 0.4, 1.05])
-    return 0.5 * np.exp(-2.0 * sigma_a)
+    diameters under the absorption of ``hair_material``, used to tint the scalp under the hair."""
+    from synmitsuba.scene.materials import hair_sigma_a
+    return 0.5 * np.exp(-2.0 * hair_sigma_a(params.melanin, params.redness))
+
+
+STRAND_SHADE = 0.06  # standard deviation of a strand's melanin around the recipe's
+
+
+def strand_melanin(params: HairParams, n: int) -> np.ndarray:
+    """(n,) melanin per strand: the recipe's, varied by ``STRAND_SHADE`` (deterministic)."""
+    rng = np.random.default_rng([params.seed, 1])
+    return np.clip(params.melanin + STRAND_SHADE * rng.standard_normal(n), 0.0, 1.0)
 
 
 def root_cover(vertices: np.ndarray, roots: np.ndarray, radius: float = 0.008) -> np.ndarray:
@@ -458,6 +465,7 @@ def root_cover(vertices: np.ndarray, roots: np.ndarray, radius: float = 0.008) -
     return np.clip(np.asarray(counts) / 3.0, 0.0, 1.0)
 
 
-def hair_material(params: HairParams):
+def hair_material(params: HairParams, melanin: np.ndarray | None = None):
+    """Mitsuba's hair BSDF for the recipe; ``melanin`` (N,) varies it strand by strand."""
     from synmitsuba.scene.materials import Material
-    return Material(kind="hair", melanin=float(params.melanin), redness=float(params.redness))
+    return Material(kind="hair", melanin=float(params.melanin), redness=float(params.redness), strand_melanin=melanin)

@@ -13,7 +13,8 @@ from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_
 from synmitsuba.body.binding import bind
 from synmitsuba.body.collide import GarmentCollider, Surface, incidence
 from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
-from synmitsuba.body.hair import Strands, grow_hair, hair_colour, hair_material, root_cover, scalp_regions_from_head
+from synmitsuba.body.hair import (Strands, grow_hair, hair_colour, hair_material, root_cover,
+                                  scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.textures import garment_material, lab_to_linear_rgb, paint_uv, skin_material
@@ -206,11 +207,12 @@ class LayeredHuman:
             A, b = T[0][self.head_bone], T[1][self.head_bone]
             hair = self.hair.transformed(A, b)
             scalp = hair.region < 5
+            shade = strand_melanin(self.recipe.hair, len(hair))
             if scalp.any():
-                out.append(PosedLayer("hair", int(Layer.HAIR), hair_material(self.recipe.hair),
+                out.append(PosedLayer("hair", int(Layer.HAIR), hair_material(self.recipe.hair, shade[scalp]),
                                       points=hair.points[scalp], radius=hair.radius[scalp]))
             if (~scalp).any():
-                out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair),
+                out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair, shade[~scalp]),
                                       points=hair.points[~scalp], radius=hair.radius[~scalp]))
         if len(self._posed) >= 4:  # the current frame and its neighbours
             self._posed.pop(next(iter(self._posed)))

@@ -10,7 +10,7 @@ import numpy as np
 
 from synmitsuba.geometry import frame
 from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
-                                        PointLight, SunSky)
+                                        PointLight, SunSky, hair_pigments, hair_sigma_a)
 from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
 
 
@@ -25,8 +25,14 @@ def bsdf_dict(mat: Material) -> dict:
     """Mitsuba BSDF dict for a Material."""
     color = _bitmap(mat.texture) if mat.texture is not None else {"type": "rgb", "value": list(mat.base_color)}
     if mat.kind == "hair":
-        return {"type": "hair", "eumelanin": 8.0 * mat.melanin, "pheomelanin": 0.2 + 2.8 * mat.redness,
-                "longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3}
+        rough = {"longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3}
+        if mat.strand_melanin is None:
+            eu, pheo = hair_pigments(mat.melanin, mat.redness)
+            return {"type": "hair", "eumelanin": float(eu), "pheomelanin": float(pheo), **rough}
+        # curves' v runs over all segments in order, so a one-column bitmap of one row per strand
+        # (nearest) gives each strand its own absorption
+        sigma = hair_sigma_a(mat.strand_melanin, mat.redness)[:, None, :]
+        return {"type": "hair", "sigma_a": {**_bitmap(sigma), "filter_type": "nearest", "wrap_mode": "clamp"}, **rough}
     if mat.kind == "principled":
         rough = _bitmap(mat.roughness_map) if mat.roughness_map is not None else mat.roughness
         bsdf = {"type": "principled", "base_color": color, "roughness": rough,

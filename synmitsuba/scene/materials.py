@@ -54,6 +54,8 @@ class Material:
     kind: ``diffuse`` (Lambertian), ``principled`` (Disney-style; roughness, metallic,
     specular) or ``hair`` (Mitsuba's hair BSDF for curves, coloured by ``melanin``, 0 blond .. 1
     black, and ``redness``, the pheomelanin share, 0 .. 1 red).
+    ``strand_melanin`` (N,) in [0, 1] gives a ``hair`` material on curves of N strands one
+    melanin per strand (replacing ``melanin``): locks of slightly different shade.
     ``texture`` replaces ``base_color``; ``roughness_map`` (H, W in [0, 1]) replaces
     ``roughness`` for ``principled``; ``bump`` (H, W height map, scaled by ``bump_scale``)
     or ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded) perturb shading normals.
@@ -72,6 +74,7 @@ class Material:
     two_sided: bool = True
     melanin: float = 0.3
     redness: float = 0.0
+    strand_melanin: np.ndarray | None = None
     name: str = ""
 
     def __post_init__(self):
@@ -80,6 +83,12 @@ class Material:
             raise ConfigError("material.kind", self.kind, f"use one of {', '.join(MATERIAL_KINDS)}")
         for f in ("roughness", "metallic", "specular", "melanin", "redness"):
             setattr(self, f, UNIT(f"material.{f}", getattr(self, f)))
+        if self.strand_melanin is not None:
+            m = np.asarray(self.strand_melanin, np.float64).ravel()
+            if not np.isfinite(m).all() or m.min() < 0 or m.max() > 1:
+                raise ConfigError("material.strand_melanin", f"values in [{m.min():.3g}, {m.max():.3g}]",
+                                  "give melanin values in [0, 1], one per strand")
+            self.strand_melanin = m
         if self.texture is not None:
             self.texture = _image("material.texture", self.texture, 3, colour=True)
         if self.bump is not None:
@@ -91,6 +100,23 @@ class Material:
             if self.roughness_map.min() < 0 or self.roughness_map.max() > 1:
                 raise ConfigError("material.roughness_map", f"values in [{self.roughness_map.min():.3g}, "
                                   f"{self.roughness_map.max():.3g}]", "give roughness values in [0, 1]")
+
+
+# Mitsuba's hair BSDF absorption per unit eumelanin and pheomelanin concentration (linear RGB)
+EUMELANIN_SIGMA_A = np.array([0.419, 0.697, 1.37])
+PHEOMELANIN_SIGMA_A = np.array([0.187, 0.4, 1.05])
+
+
+def hair_pigments(melanin, redness) -> tuple:
+    """(eumelanin, pheomelanin) concentrations of a ``hair`` material: melanin 0 .. 1 maps to
+    eumelanin 0 .. 8 (blond .. black), redness to pheomelanin 0.2 .. 3."""
+    return 8.0 * np.asarray(melanin, np.float64), 0.2 + 2.8 * np.asarray(redness, np.float64)
+
+
+def hair_sigma_a(melanin, redness) -> np.ndarray:
+    """Absorption coefficient (..., 3) of hair of this melanin and redness."""
+    eu, pheo = hair_pigments(melanin, redness)
+    return eu[..., None] * EUMELANIN_SIGMA_A + pheo[..., None] * PHEOMELANIN_SIGMA_A
 
 
 # -- environments ----------------------------------------------------------------------
