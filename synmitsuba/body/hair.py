@@ -407,13 +407,12 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     L = BEARDS[params.beard]
     mask = face_region == 5
     if L > 0 and mask.any():
-        def keep(roots):  # goatee and mustache: a narrow band around the mouth
+        def keep(roots):  # a goatee on the chin below the mouth, a mustache over the upper lip
             rel = roots - scalp.origin
-            x = rel @ np.cross(scalp.up, scalp.forward)
-            ok = np.abs(x) < (0.03 if params.beard == "goatee" else 0.035)
+            x, up = rel @ np.cross(scalp.up, scalp.forward), rel @ scalp.up
             if params.beard == "mustache":
-                ok &= (rel @ scalp.up) > np.percentile(all_up, 60)
-            return ok
+                return (np.abs(x) < 0.035) & (up > np.percentile(all_up, 60))
+            return (np.abs(x) < 0.025) & (up < np.percentile(all_up, 35))
         all_up = (scalp.vertices[np.unique(scalp.faces[mask])] - scalp.origin) @ scalp.up
         beard_look = (0.6, 0.2, params.curliness * 0.5, 0.2, 0.3, "back", 0.0)
         pts, normals = _strands(scalp, mask, int(800 + 1600 * params.density), L, beard_look, rng, comb=-scalp.up,

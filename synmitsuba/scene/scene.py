@@ -106,10 +106,11 @@ class Scene:
 
     def add_curves(self, name: str, points, radius=0.001, material: Material | None = None,
                    instance: int = 0, layer: int = 0) -> CurveShape:
-        """Add cubic B-spline strands: control points (N, K, 3) with K >= 4, radius (N, K) or scalar."""
+        """Add strands: points (N, K, 3) with K >= 2 joined by round segments (Mitsuba's
+        ``linearcurve``; its ``bsplinecurve`` crashed on dense hair), radius (N, K) or scalar."""
         self._check_name(name)
         p = np.asarray(points, dtype=np.float64)
-        _finite(f"{name}.points", p, "N x K x 3 (K >= 4)", p.ndim == 3 and p.shape[2] == 3 and p.shape[1] >= 4
+        _finite(f"{name}.points", p, "N x K x 3 (K >= 2)", p.ndim == 3 and p.shape[2] == 3 and p.shape[1] >= 2
                 and p.shape[0] > 0)
         r = np.broadcast_to(np.asarray(radius, dtype=np.float64), p.shape[:2]).copy()
         if not (np.isfinite(r).all() and (r > 0).all()):
