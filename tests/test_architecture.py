@@ -168,8 +168,8 @@ def test_hair_redness_reaches_the_bsdf(sm):
 def test_strands_take_their_own_melanin(sm):
     """Per-strand melanin: a comb of strands alternating blond (0.05) and black (0.95) in one
     curve shape renders the blond strands several times brighter (each strand's row of the
-    sigma_a bitmap reaches its own segments), and the same shape with one melanin renders even.
-    Only fully covered pixels count (alpha > 0.99): edge pixels mix in the bright sky."""
+    sigma_a bitmap reaches its own segments), the same shape with one melanin renders even, and
+    exactly as Mitsuba's own pigment parameters do. Only fully covered pixels count (alpha > 0.99): edge pixels mix in the bright sky."""
     t = np.linspace(0, 1, 10)
     xs = np.linspace(-0.3, 0.3, 8)
     strands = np.array([[[x, 0.3 + 0.8 * s, 0.0] for s in t] for x in xs])
@@ -187,6 +187,14 @@ def test_strands_take_their_own_melanin(sm):
     blond, black = means["mixed"][0::2], means["mixed"][1::2]
     assert blond.min() > 3 * black.max(), (blond, black)
     assert means["even"].max() < 1.5 * means["even"].min(), means["even"]
+    same = []  # one melanin for every strand renders as Mitsuba's own eumelanin/pheomelanin parameters
+    for shade in (None, np.full(8, 0.3)):
+        scene = sm.Scene()
+        scene.add_curves("hair", strands, radius=0.012, instance=1,
+                         material=sm.Material(kind="hair", melanin=0.3, redness=0.4, strand_melanin=shade))
+        scene.set_environment(sm.Constant(1.0))
+        same.append(sm.render(scene, cam, spp=4).rgb)
+    assert np.abs(same[0] - same[1]).max() < 1e-4
     with pytest.raises(ConfigError, match="strand_melanin"):
         sm.Material(kind="hair", strand_melanin=[0.5, 1.5])
 
