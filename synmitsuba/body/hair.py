@@ -125,6 +125,9 @@ class Strands:
     def __len__(self) -> int:
         return len(self.points)
 
+    def subset(self, keep: np.ndarray) -> "Strands":
+        return Strands(self.points[keep], self.radius[keep], self.region[keep])
+
     @staticmethod
     def concat(parts: list["Strands"]) -> "Strands":
         parts = [p for p in parts if len(p)]

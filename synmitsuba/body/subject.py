@@ -117,6 +117,7 @@ class LayeredHuman:
         self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
         self._build_accessories()
+        self.hair_shade = strand_melanin(self.recipe.hair, len(self.hair))  # per strand, once: pose() reuses it
         self._tint_scalp()
         self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
 
@@ -157,12 +158,10 @@ class LayeredHuman:
                            metallic=0.0 if p.kind != "watch" else 0.8)
             self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, None, self.body.weights[near]))
             if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
-                keep = ~acc.under_cap(self.head, self.hair.points[:, 0])
-                self.hair = Strands(self.hair.points[keep], self.hair.radius[keep], self.hair.region[keep])
+                self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
             if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
                 gap, _ = cKDTree(v).query(self.hair.points[:, 0])
-                keep = (self.hair.region < 5) | (gap > 0.015)
-                self.hair = Strands(self.hair.points[keep], self.hair.radius[keep], self.hair.region[keep])
+                self.hair = self.hair.subset((self.hair.region < 5) | (gap > 0.015))
 
     def _tint_scalp(self) -> None:
         """The skin under the hair takes the hair's colour, ``SCALP_TINT`` of the way (``BEARD_TINT``
@@ -207,7 +206,7 @@ class LayeredHuman:
             A, b = T[0][self.head_bone], T[1][self.head_bone]
             hair = self.hair.transformed(A, b)
             scalp = hair.region < 5
-            shade = strand_melanin(self.recipe.hair, len(hair))
+            shade = self.hair_shade
             if scalp.any():
                 out.append(PosedLayer("hair", int(Layer.HAIR), hair_material(self.recipe.hair, shade[scalp]),
                                       points=hair.points[scalp], radius=hair.radius[scalp]))
