@@ -197,6 +197,8 @@ def test_strands_take_their_own_melanin(sm):
     assert np.abs(same[0] - same[1]).max() < 1e-4
     with pytest.raises(ConfigError, match="strand_melanin"):
         sm.Material(kind="hair", strand_melanin=[0.5, 1.5])
+    with pytest.raises(ConfigError, match=r"hair\.material\.strand_melanin = '3 values'.*one melanin per strand: 8"):
+        sm.Scene().add_curves("hair", strands, material=sm.Material(kind="hair", strand_melanin=[0.5] * 3))
 
 
 def test_motion_sources_resolve_in_one_place(tmp_path):

@@ -115,6 +115,10 @@ class Scene:
         r = np.broadcast_to(np.asarray(radius, dtype=np.float64), p.shape[:2]).copy()
         if not (np.isfinite(r).all() and (r > 0).all()):
             raise ConfigError(f"{name}.radius", float(r.min()), "radii must be finite and > 0 metres")
+        shade = None if material is None else material.strand_melanin
+        if shade is not None and len(shade) != len(p):
+            raise ConfigError(f"{name}.material.strand_melanin", f"{len(shade)} values",
+                              f"give one melanin per strand: {len(p)}")
         inst, lay = _ids(name, instance, layer)
         shape = CurveShape(name, p, r, material or Material(), inst, lay)
         self.curves[name] = shape
