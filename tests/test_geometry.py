@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from synmitsuba.geometry import (align_vectors, axis_rotation, camera_ray_matrix, euler_to_matrix, frame,
-                                 slerp_matrices, triangle_areas, vertex_normals)
+                                 slerp_matrices, triangle_areas, vertex_normals, winding_numbers)
 
 
 def _rodrigues_min(a, b):
@@ -83,3 +83,27 @@ def test_weld_joins_points_within_a_micrometre_whatever_the_grid():
     d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)  # brute force: same group iff within 1e-6
     assert ((rep[:, None] == rep[None]) == (d <= 1e-6)).all()
     assert (rep <= np.arange(len(pts))).all()  # the lowest index of its group
+
+
+def test_winding_numbers_and_signed_distance_agree_with_a_torus():
+    """Winding numbers against the analytic torus (points off the polygonised surface); the
+    pseudonormal sign of ``signed_distance`` against the winding numbers on coarse tori, where
+    saddle vertices and edges make one face's normal point the wrong way."""
+    import trimesh
+    from synmitsuba.body.binding import closest_points, signed_distance
+    from synmitsuba.geometry import face_normals
+    rng = np.random.default_rng(0)
+    p = rng.uniform([-1.5, -1.5, -0.5], [1.5, 1.5, 0.5], (3000, 3))
+    fine = trimesh.creation.torus(1.0, 0.3, major_sections=48, minor_sections=24)
+    true = np.hypot(np.hypot(p[:, 0], p[:, 1]) - 1.0, p[:, 2]) - 0.3  # exact distance to the smooth torus
+    w = winding_numbers(fine.vertices, fine.faces, p)
+    far = np.abs(true) > 0.01  # the 48 x 24 polygon lies within 4 mm of the torus
+    assert np.array_equal((w > 0.5)[far], (true < 0)[far]) and np.abs(w - np.round(w)).max() < 1e-6
+    for major, minor in ((6, 4), (5, 3)):
+        m = trimesh.creation.torus(1.0, 0.4, major_sections=major, minor_sections=minor)
+        inside = winding_numbers(m.vertices, m.faces, p) > 0.5
+        d = signed_distance(m.vertices, m.faces, p, k=8)
+        assert np.array_equal(d < 0, inside) and 0.05 < inside.mean() < 0.3
+        c, tri, _ = closest_points(m.vertices, m.faces, p, k=8)  # one face's side: wrong at saddles
+        assert ((np.einsum("ij,ij->i", p - c, face_normals(m.vertices[m.faces[tri]])) < 0) != inside).sum() >= 5
+        np.testing.assert_allclose(np.abs(d), np.linalg.norm(p - c, axis=1))

@@ -136,6 +136,7 @@ def _cli(*args):
     return run
 
 
+@pytest.mark.slow  # 90 s on 2 cores (make bench runs it); make test keeps the fit itself and the missing-model errors
 def test_generation_and_fit_smplx_write_the_same_labels(models, tiny, tmp_path, sm):
     """A generation with ``smplx: {enabled: true}`` and ``synmitsuba fit-smplx`` on a dataset
     generated without it write the same parameters; they pose the model where the sample's
