@@ -16,7 +16,7 @@ class Binding:
     weights: np.ndarray      # (N, J) interpolated skinning weights
 
 
-def _incident_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
+def incident_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     """(V, max valence) face indices around each vertex, padded with -1."""
     order = np.argsort(faces.ravel(), kind="stable")
     vert = faces.ravel()[order]
@@ -29,14 +29,20 @@ def _incident_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     return table
 
 
-def closest_points(vertices, faces, points, k: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def closest_points(vertices, faces, points, k: int = 4, tree=None, around=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(closest point (N, 3), face index (N,), barycentric (N, 3)) on the mesh, searched among
-    the faces around the ``k`` nearest vertices (exact for points near the surface)."""
-    import trimesh
+    the faces around the ``k`` nearest vertices (exact for points near the surface). ``tree``
+    (a cKDTree of ``vertices``) and ``around`` (``incident_faces``) save rebuilding them."""
     from scipy.spatial import cKDTree
-    points = np.asarray(points, dtype=np.float64)
-    _, near = cKDTree(vertices).query(points, k=k)
-    cand = _incident_faces(faces, len(vertices))[near.reshape(len(points), -1)].reshape(len(points), -1)
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    _, near = (cKDTree(vertices) if tree is None else tree).query(points, k=k)
+    around = incident_faces(faces, len(vertices)) if around is None else around
+    return closest_on_faces(vertices, faces, points, around[near.reshape(len(points), -1)].reshape(len(points), -1))
+
+
+def closest_on_faces(vertices, faces, points, cand) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``closest_points`` among given candidate faces (N, C) per point, -1 for none."""
+    import trimesh
     valid = cand >= 0
     tri = vertices[faces[np.where(valid, cand, 0)]]                     # (N, C, 3, 3)
     q = np.broadcast_to(points[:, None], cand.shape + (3,))

@@ -10,7 +10,7 @@ import numpy as np
 
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
-from synmitsuba.body.binding import bind
+from synmitsuba.body.binding import bind, incident_faces
 from synmitsuba.body.collide import GarmentCollider, Surface, incidence
 from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
 from synmitsuba.body.hair import (Strands, grow_hair, hair_colour, hair_material, root_cover,
@@ -96,6 +96,7 @@ class LayeredHuman:
         self.body: BodyMesh = body
         self.split = split_at_seams(body.faces, body.face_uv, body.uv)
         self._incidence = incidence(body.faces, len(body.vertices))
+        self._around = incident_faces(body.faces, len(body.vertices))
         size = recipe.texture_size
         self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin_material(recipe.skin, anny_uv_masks(skin_size(size)), skin_size(size)),
                                          body.vertices[self.split.source], self.split.faces, self.split.uv,
@@ -222,7 +223,7 @@ class LayeredHuman:
         """Garments (inner first) out of the posed body, then out of the garments under them."""
         body = np.empty_like(self.body.vertices)
         body[self.split.source] = layers[0].vertices
-        surface, inner = Surface.of(body, self.body.faces, self._incidence), []
+        surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), []
         for part, layer in zip(self.parts, layers):
             if part.collider is None:
                 continue
