@@ -43,7 +43,7 @@ def _normals(vertices: np.ndarray, faces: np.ndarray, vf) -> np.ndarray:
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
 
 
-def _spread(faces: np.ndarray, n: int):
+def neighbour_mean(faces: np.ndarray, n: int):
     """Row-normalised vertex adjacency (sparse) of a mesh, self included."""
     from scipy import sparse
     i = np.concatenate([faces[:, [0, 1, 2, 1, 2, 0]].ravel(), np.arange(n)])
@@ -115,7 +115,7 @@ class GarmentCollider:
     def __init__(self, faces: np.ndarray, n_vertices: int, margin: float, bound_vertices: np.ndarray,
                  barycentric: np.ndarray):
         self.margin = float(margin)
-        self.spread = _spread(np.asarray(faces), n_vertices)
+        self.spread = neighbour_mean(np.asarray(faces), n_vertices)
         self.incidence = incidence(np.asarray(faces), n_vertices)
         self.bound_vertices, self.barycentric = np.asarray(bound_vertices), np.asarray(barycentric)
 

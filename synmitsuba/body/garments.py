@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.binding import closest_points, signed_distance
+from synmitsuba.body.collide import neighbour_mean
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
 from synmitsuba.geometry import face_normals, vertex_normals
@@ -22,6 +23,11 @@ from synmitsuba.schema import Choice, Nested, Number, Params, spec
 from synmitsuba.scene.layers import Layer
 
 CLEARANCE = 0.002
+# a top's slope going down (``drape``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
+# further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
+# and no inner garment hangs out through the one over it
+HANG = (0.85, 19.0, 0.014, 0.12)
+SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
 GROUPS = {
     "torso": ("root", "pelvis", "spine", "clavicle", "shoulder01"),
     "upperarm": ("upperarm",), "lowerarm": ("lowerarm",), "hand": ("wrist", "finger", "metacarpal"),
@@ -255,6 +261,8 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     else:
         v, f, uv = _cut_shell(body, r, split, kind.region(g, r, body.vertices), offset)
         v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
+        if GARMENTS[g.kind].layer in (Layer.TOP, Layer.DRESS):
+            v = drape(v, f, _over_torso(body, r, v), float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0])))
         if kind.shape == "shell+flare":
             sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
             f = np.concatenate([f, sf + len(v)])
@@ -266,16 +274,61 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
 
 
+def _over_torso(body, r: BodyRegions, v: np.ndarray) -> np.ndarray:
+    """(N,) True for shell points whose closest body vertex is on the torso (not the arms)."""
+    from scipy.spatial import cKDTree
+    return r.group[cKDTree(body.vertices).query(v)[1]] == "torso"
+
+
+def _open_edges(f: np.ndarray, merged: np.ndarray) -> np.ndarray:
+    """(E, 2) directed edges a -> b (as their face winds them) that only one face has, on the
+    vertices ``merged`` (``weld``) makes one: the garment's openings."""
+    directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    m = np.sort(merged[directed], 1)
+    _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
+    return directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]
+
+
+def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, rounds: int = 40,
+          soften: int = SOFTEN) -> np.ndarray:
+    """Cloth that hangs: going down an edge, a ``hanging`` vertex may come in towards the body
+    by at most ``slope`` times the drop (measured along its horizontal outward normal), so a
+    loose top falls from the chest and the shoulder blades over the underbust, the navel and
+    the small of the back instead of following them like paint (a shell offset along the
+    normals keeps every hollow of the skin). ``rounds`` edges is how far a hang reaches; then
+    ``soften`` rounds of averaging the lift over neighbours round the ledge it leaves. Seam
+    copies of a vertex (the render topology splits at UV seams) move as one: no crack opens."""
+    rep = weld(v)
+    ff = rep[f]
+    edges = np.unique(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]), axis=0)
+    p = v[rep].copy()
+    up = np.where((p[edges[:, 0], 1] > p[edges[:, 1], 1])[:, None], edges, edges[:, ::-1])  # (upper, lower)
+    up = up[hanging[rep][up].all(1)]  # hanging from hanging cloth: a sleeve is no torso's rail
+    n = vertex_normals(p, ff)
+    n[:, 1] = 0.0
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
+    a, b = up.T
+    out = np.zeros(len(p))  # how far each vertex moves out along n
+    for _ in range(rounds):
+        q = p + out[:, None] * n
+        need = np.einsum("ij,ij->i", q[a] - q[b], n[b]) - slope * (q[a, 1] - q[b, 1])
+        lift = np.zeros(len(p))
+        np.maximum.at(lift, b, need)
+        if lift.max() <= 1e-5:
+            break
+        out += np.clip(lift, 0.0, None)
+    mean = neighbour_mean(ff, len(p))
+    for _ in range(soften):  # where the fall leaves the chest, a rounded fold, not a ledge
+        out = mean @ out
+    return (p + out[:, None] * n)[rep]
+
+
 def _hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
     """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
     thickness) deep towards the closest body point, so an edge seen in a close-up has thickness.
     Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
     the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
-    merged = weld(v)
-    directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    m = np.sort(merged[directed], 1)
-    _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
-    edge = directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]  # a -> b as its face winds it
+    edge = _open_edges(f, weld(v))
     if not len(edge):
         return v, f, uv
     ends = np.unique(edge)
