@@ -9,6 +9,7 @@ jackets in offset.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Callable
 
@@ -27,6 +28,7 @@ CLEARANCE = 0.002
 # further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
 # and no inner garment hangs out through the one over it
 HANG = (0.85, 19.0, 0.014, 0.12)
+TUCK = 0.03  # metres under the waist a top worn with a skirt ends
 SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
 GROUPS = {
     "torso": ("root", "pelvis", "spine", "clavicle", "shoulder01"),
@@ -250,16 +252,22 @@ def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
     return max(GARMENTS[g.kind].offset + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
 
 
-def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0) -> GarmentMesh:
-    """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology."""
+def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0,
+                  tuck: bool = False) -> GarmentMesh:
+    """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology.
+    ``tuck``: a top worn with a skirt ends ``TUCK`` under the waist, as if tucked in (its hem
+    would otherwise run inside the skirt's flare and show through it in notches)."""
     kind = GARMENTS[g.kind]
     offset = garment_offset(g, below)
+    shape = g
+    if tuck and kind.layer == Layer.TOP:
+        shape = dataclasses.replace(g, length=min(g.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
     if kind.shape == "flare":
         v, f, uv = _flare(body, r, g, offset, r.waist_y)
     elif kind.shape == "hull":
         v, f, uv = _shoes(body, r, g, offset)
     else:
-        v, f, uv = _cut_shell(body, r, split, kind.region(g, r, body.vertices), offset)
+        v, f, uv = _cut_shell(body, r, split, kind.region(shape, r, body.vertices), offset)
         v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
         if GARMENTS[g.kind].layer in (Layer.TOP, Layer.DRESS):
             v = drape(v, f, _over_torso(body, r, v), float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0])))

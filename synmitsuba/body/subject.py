@@ -104,7 +104,8 @@ class LayeredHuman:
         self.garments: list[GarmentMesh] = []
         below = 0.0
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
-            m = build_garment(body, self.regions, self.split, g, below if g.kind != "shoes" else 0.0)
+            m = build_garment(body, self.regions, self.split, g, below if g.kind != "shoes" else 0.0,
+                              tuck=any(x.kind == "skirt" for x in recipe.garments))
             if g.kind != "shoes":
                 below = max(below, m.offset)
             self.garments.append(m)
