@@ -729,3 +729,13 @@ def test_drape_hangs_cloth_from_what_is_above_at_its_slope():
         assert (hang - r).max() > 0.004  # it did hang somewhere
         soft = np.hypot(*drape(v, f, np.ones(len(v), bool), slope)[:, [0, 2]].T) - r0
         assert soft.min() >= -1e-12 and 0.4 * (r1 - r0).max() < soft.max() <= (r1 - r0).max() + 1e-12
+
+
+def test_a_top_over_a_skirt_is_tucked_at_the_waist(human):
+    """With ``tuck`` (the outfit has a skirt) a long top ends TUCK under the waist, over the
+    skirt's band, instead of inside its flare; without it, where its length says."""
+    from synmitsuba.body.garments import TUCK, GarmentParams, build_garment
+    g = GarmentParams(kind="tshirt", length=0.7)
+    r = human.regions
+    low = {t: build_garment(human.body, r, human.split, g, tuck=t).vertices[:, 1].min() for t in (False, True)}
+    assert low[True] == pytest.approx(r.waist_y - TUCK, abs=0.012) and low[False] < r.waist_y - TUCK - 0.05
