@@ -62,8 +62,8 @@ def feature_normals(vertices, faces, face, barycentric, tol: float = 1e-6) -> np
     is exact on a closed mesh; against one face's normal it is not where the closest point is a
     vertex or edge of a saddle or a fold (an armpit, a crotch): such points read as inside."""
     vertices, faces = np.asarray(vertices, dtype=np.float64), np.asarray(faces)
-    fn = face_normals(vertices[faces])
     tri = vertices[faces]
+    fn = face_normals(tri)
     vn = np.zeros_like(vertices)
     for c in range(3):  # the angle at each corner weighs its face's normal
         a, b = tri[:, (c + 1) % 3] - tri[:, c], tri[:, (c + 2) % 3] - tri[:, c]

@@ -269,8 +269,9 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     else:
         v, f, uv = _cut_shell(body, r, split, kind.region(shape, r, body.vertices), offset)
         v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
-        if GARMENTS[g.kind].layer in (Layer.TOP, Layer.DRESS):
-            v = drape(v, f, _over_torso(body, r, v), float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0])))
+        if kind.layer in (Layer.TOP, Layer.DRESS):
+            slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
+            v = drape(v, f, _over_torso(body, r, v), slope)
         if kind.shape == "shell+flare":
             sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
             f = np.concatenate([f, sf + len(v)])
