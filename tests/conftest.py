@@ -10,6 +10,16 @@ os.environ.setdefault("DRJIT_CACHE_DIR", str(ROOT / ".cache" / "drjit"))
 import pytest  # noqa: E402
 
 
+def colour_science():
+    """colour-science (the independent reference for our colour conversions), without its
+    warning that matplotlib is missing."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import colour
+    return colour
+
+
 @pytest.fixture(scope="session")
 def sm():
     import synmitsuba

@@ -10,6 +10,8 @@ from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import axis_rotation
 
+from conftest import colour_science
+
 
 @pytest.fixture(scope="module")
 def human():
@@ -425,10 +427,24 @@ def test_skin_roughness_varies_by_region(sm):
     assert any(k.endswith("roughness.data") for k in params.keys())
 
 
+def test_colour_conversions_match_colour_science():
+    """Our CIELAB / XYZ / linear sRGB formulas (written out to spare each worker colour-science's
+    2-s import) against colour-science on random colours, the sRGB curves both ways."""
+    from synmitsuba import _colour as c
+    colour, rng = colour_science(), np.random.default_rng(0)
+    lab = np.stack([rng.uniform(0, 100, 500), rng.uniform(-90, 90, 500), rng.uniform(-90, 90, 500)], -1)
+    xyz = colour.Lab_to_XYZ(lab)
+    assert np.allclose(c.lab_to_xyz(lab), xyz, atol=1e-12) and np.allclose(c.xyz_to_lab(xyz), lab, atol=1e-9)
+    rgb = rng.uniform(0, 1, (500, 3))
+    assert np.allclose(c.rgb_to_xyz(rgb), colour.RGB_to_XYZ(rgb, "sRGB", apply_cctf_decoding=False), atol=1e-12)
+    assert np.allclose(c.xyz_to_rgb(xyz), colour.XYZ_to_RGB(xyz, "sRGB", apply_cctf_encoding=False), atol=1e-12)
+    assert np.allclose(c.srgb_encode(rgb), colour.cctf_encoding(rgb, function="sRGB"), atol=1e-12)
+    assert np.allclose(c.srgb_decode(rgb), colour.cctf_decoding(rgb, function="sRGB"), atol=1e-12)
+
+
 def test_skin_tones_span_light_to_dark_by_ita():
-    from synmitsuba._colour import import_colour
     from synmitsuba.body.textures import ITA_RANGE, SkinParams, render_skin_texture
-    colour = import_colour()
+    colour = colour_science()
     L = []
     for ita in (ITA_RANGE[0], -30, 0, 30, ITA_RANGE[1]):
         albedo = render_skin_texture(SkinParams(ita_deg=ita, freckles=0, blush=0), {}, 8)[0, 0]

@@ -91,10 +91,10 @@ def anny_age(years: float) -> float:
 def calibrated(sex: str, phenotype: str, age: float, u: float) -> float:
     """The ``u``-quantile of anny's calibrated Beta distribution of ``phenotype`` given ``age``
     (its WHO-fitted ``shape_calibration``): a draw from it when ``u`` is uniform."""
-    from scipy.stats import beta
+    from scipy.special import betaincinv  # what scipy.stats.beta.ppf calls, without scipy.stats's 1.5-s import
     ages, alphas, betas = shape_calibration()[sex][phenotype]
     a, b = np.interp(age, ages, alphas), np.interp(age, ages, betas)
-    return float(beta.ppf(u, a, b))
+    return float(betaincinv(a, b, u))
 
 
 def weight_for_bmi(phenotypes: dict, bmi: float, stature: float, keep_muscle: bool = False) -> tuple[float, float]:
@@ -122,7 +122,7 @@ def sample_phenotypes(rng: np.random.Generator, fixed: dict | None = None, years
     reached by solving for ``height`` and body mass index from a log-normal per sex (``BMI``)
     reached by solving for ``weight``; under 18 years, height and weight from anny's
     calibration instead. ``fixed`` values win; a fixed ``height`` or ``weight`` is kept."""
-    from scipy.stats import norm
+    from scipy.special import ndtri  # the standard normal's quantile (scipy.stats.norm.ppf)
     fixed = fixed or {}
     u = rng.uniform(0, 1, len(PHENOTYPES))  # gender, age, muscle, weight, height, proportions
     female = rng.random() < 0.5
@@ -143,7 +143,7 @@ def sample_phenotypes(rng: np.random.Generator, fixed: dict | None = None, years
         pheno["height"] = height_for_stature(pheno, stature)
         if "weight" not in fixed:
             median, log_sd = BMI[sex]
-            bmi = median * np.exp(log_sd * np.clip(norm.ppf(u[3]), -2.5, 2.5))
+            bmi = median * np.exp(log_sd * np.clip(ndtri(u[3]), -2.5, 2.5))
             pheno["weight"], pheno["muscle"] = weight_for_bmi(pheno, bmi, stature, "muscle" in fixed)
             pheno["height"] = height_for_stature(pheno, stature)  # weight moves the crown a little
     return {k: round(float(np.clip(pheno[k], 0.0, 1.0)), 4) for k in PHENOTYPES}

@@ -1,6 +1,7 @@
 """Procedural textures: garments (base colour + pattern + decal + bump, UV mapping) and skin.
 
-Colours are sampled in CIELAB (perceptual) and converted with colour-science to linear sRGB.
+Colours are sampled in CIELAB (perceptual) and converted to linear sRGB (D65, the CIE 1976
+formulas written out in ``synmitsuba/_colour.py``; tests check them against colour-science).
 Skin tone is sampled by ITA (individual typology angle, ITA = atan((L* - 50) / b*)) from
 -60 deg (very dark) to 65 deg (very light), the range of the six Fitzpatrick-like ITA
 classes, with L* following ITA and a hue between red and yellow. All rendering is
@@ -12,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba._colour import import_colour
+from synmitsuba._colour import lab_to_xyz, rgb_to_xyz, xyz_to_lab, xyz_to_rgb
 from synmitsuba.errors import ConfigError
 from synmitsuba.schema import Check, Choice, Number, Params, Vector, spec
 
@@ -23,17 +24,13 @@ ITA_RANGE = (-60.0, 65.0)
 
 
 def lab_to_linear_rgb(lab) -> np.ndarray:
-    colour = import_colour()
-    xyz = colour.Lab_to_XYZ(np.asarray(lab, dtype=np.float64))
-    rgb = colour.XYZ_to_RGB(xyz, "sRGB", apply_cctf_encoding=False)
-    return np.clip(rgb, 0.0, 1.0)
+    return np.clip(xyz_to_rgb(lab_to_xyz(np.asarray(lab, dtype=np.float64))), 0.0, 1.0)
 
 
 def linear_rgb_to_lab(rgb) -> list[float]:
     """Inverse of ``lab_to_linear_rgb`` (for colours fitted in linear RGB)."""
-    colour = import_colour()
-    xyz = colour.RGB_to_XYZ(np.clip(np.asarray(rgb, dtype=np.float64), 1e-6, 1.0), "sRGB", apply_cctf_decoding=False)
-    return [round(float(x), 3) for x in colour.XYZ_to_Lab(xyz)]
+    xyz = rgb_to_xyz(np.clip(np.asarray(rgb, dtype=np.float64), 1e-6, 1.0))
+    return [round(float(x), 3) for x in xyz_to_lab(xyz)]
 
 
 def sample_lab_colour(rng: np.random.Generator, l_range=(20, 85), chroma=(5, 70)) -> list[float]:

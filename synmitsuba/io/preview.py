@@ -1,4 +1,4 @@
-"""sRGB previews of linear renders (colour-science's sRGB encoding) and PNG writing."""
+"""sRGB previews of linear renders (IEC 61966-2-1 encoding) and PNG writing."""
 from __future__ import annotations
 
 import contextlib
@@ -6,14 +6,13 @@ import os
 
 import numpy as np
 
-from synmitsuba._colour import import_colour
+from synmitsuba._colour import srgb_encode
 
 
 def to_srgb8(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     """Linear RGB (..., 3) -> uint8 sRGB with the IEC 61966-2-1 curve, clipped to [0, 1]."""
-    colour = import_colour()
     lin = np.clip(np.nan_to_num(np.asarray(rgb, dtype=np.float64) * 2.0 ** exposure), 0.0, 1.0)
-    return np.round(colour.cctf_encoding(lin, function="sRGB") * 255.0).astype(np.uint8)
+    return np.round(srgb_encode(lin) * 255.0).astype(np.uint8)
 
 
 # temporaries being written now: an interrupt handler that must exit at once removes them

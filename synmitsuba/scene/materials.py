@@ -35,8 +35,8 @@ def _image(name: str, value, channels: int | None, colour: bool = False) -> np.n
     if arr.dtype == np.uint8:
         arr = arr.astype(np.float32) / 255.0
         if colour:
-            from synmitsuba._colour import import_colour
-            arr = import_colour().cctf_decoding(arr, function="sRGB")
+            from synmitsuba._colour import srgb_decode
+            arr = srgb_decode(arr)
     arr = np.ascontiguousarray(arr, dtype=np.float32)
     want = "H x W" if channels is None else f"H x W x {channels}"
     ok = arr.ndim == 2 if channels is None else (arr.ndim == 3 and arr.shape[2] == channels)
