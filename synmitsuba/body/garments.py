@@ -15,7 +15,6 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.binding import closest_points, signed_distance
 from synmitsuba.body.collide import neighbour_mean
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
@@ -215,13 +214,13 @@ def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
 
 def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int = 3) -> np.ndarray:
     """Move points that are inside or closer than ``clearance`` to the body out along the normal."""
-    p = points.copy()
+    p, surface = points.copy(), body.surface()
     for _ in range(rounds):
-        d = signed_distance(body.vertices, body.faces, p)
+        d = surface.signed_distance(p)
         bad = d < clearance
         if not bad.any():
             break
-        closest, tri, _ = closest_points(body.vertices, body.faces, p[bad])
+        closest, tri, _ = surface.closest(p[bad])
         n = face_normals(body.vertices[body.faces[tri]])
         p[bad] = closest + n * clearance * 1.5
     return p
@@ -341,7 +340,7 @@ def _hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
     if not len(edge):
         return v, f, uv
     ends = np.unique(edge)
-    closest = closest_points(body.vertices, body.faces, v[ends])[0]
+    closest = body.surface().closest(v[ends])[0]
     gap = np.linalg.norm(v[ends] - closest, axis=1, keepdims=True)
     towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9),  # on the body: the cloth's normal
                        vertex_normals(v, f)[ends])

@@ -10,7 +10,7 @@ import numpy as np
 
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
-from synmitsuba.body.binding import bind, incident_faces
+from synmitsuba.body.binding import bind
 from synmitsuba.body.collide import GarmentCollider, Surface, incidence
 from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
 from synmitsuba.body.hair import (Strands, grow_hair, hair_colour, hair_material, root_cover,
@@ -96,7 +96,7 @@ class LayeredHuman:
         self.body: BodyMesh = body
         self.split = split_at_seams(body.faces, body.face_uv, body.uv)
         self._incidence = incidence(body.faces, len(body.vertices))
-        self._around = incident_faces(body.faces, len(body.vertices))
+        self._around = body.surface().around
         size = recipe.texture_size
         self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin_material(recipe.skin, anny_uv_masks(skin_size(size)), skin_size(size)),
                                          body.vertices[self.split.source], self.split.faces, self.split.uv,
@@ -109,7 +109,7 @@ class LayeredHuman:
             if g.kind != "shoes":
                 below = max(below, m.offset)
             self.garments.append(m)
-            b = bind(body.vertices, body.faces, body.weights, m.vertices)
+            b = bind(body.vertices, body.faces, body.weights, m.vertices, body.surface())
             self.parts.append(_Part(g.kind, m.layer, garment_material(g.texture, size), m.vertices, m.faces, m.uv,
                                     b.weights, GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset),
                                                                body.faces[b.triangle], b.barycentric)))

@@ -99,23 +99,25 @@ def _uv_grid(p: GarmentTextureParams, size: int):
 
 
 def _value_noise(x, y, seed: int, octaves: int = 3) -> np.ndarray:
-    """Smooth periodic value noise in [0, 1] (period 1 in uv)."""
+    """Smooth periodic value noise in [0, 1] (period 1 in uv). Each octave's lattice is padded
+    by one wrapped row and column, so a texel's four corners are at i, i + 1, i + n + 1 and
+    i + n + 2 (half the cost of wrapping each index)."""
     rng = np.random.default_rng(seed)
     out = np.zeros(np.shape(x), np.float32)
     total = 0.0
     for o in range(octaves):
         n = 4 * 2 ** o
-        grid = rng.random((n, n)).astype(np.float32).ravel()
-        gx, gy = (x * n) % n, (y * n) % n
+        grid = np.pad(rng.random((n, n)).astype(np.float32), ((0, 1), (0, 1)), mode="wrap").ravel()
+        gx, gy = x * np.float32(n), y * np.float32(n)
         x0, y0 = np.floor(gx), np.floor(gy)
         fx, fy = gx - x0, gy - y0
-        fx, fy = fx * fx * (3 - 2 * fx), fy * fy * (3 - 2 * fy)
-        x0, y0 = x0.astype(np.int32) % n, y0.astype(np.int32) % n  # % n: float rounding can give n
-        x1, y1 = (x0 + 1) % n, (y0 + 1) % n
-        r0, r1 = y0 * n, y1 * n
-        top = grid.take(r0 + x0) * (1 - fx) + grid.take(r0 + x1) * fx
-        bottom = grid.take(r1 + x0) * (1 - fx) + grid.take(r1 + x1) * fx
-        out += (top * (1 - fy) + bottom * fy) / 2 ** o
+        fx *= fx * (3 - 2 * fx)
+        fy *= fy * (3 - 2 * fy)
+        i = (y0.astype(np.int32) % n) * (n + 1) + x0.astype(np.int32) % n
+        a, b = grid.take(i), grid.take(i + 1)
+        top = a + (b - a) * fx
+        a, b = grid.take(i + n + 1), grid.take(i + n + 2)
+        out += (top + (a + (b - a) * fx - top) * fy) * np.float32(1 / 2 ** o)
         total += 1 / 2 ** o
     return out / np.float32(total)
 
@@ -290,9 +292,12 @@ def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarr
     lab = p.lab()
     img = np.broadcast_to(lab_to_linear_rgb(lab).astype(np.float32), (size, size, 3)).copy()
 
-    def blend(mask, target_lab):
-        m = np.clip(mask, 0, 1).astype(np.float32)[..., None]
-        img[...] += (lab_to_linear_rgb(target_lab).astype(np.float32) - img) * m
+    def blend(mask, target_lab):  # over the mask's bounding box only (lips, nails: a few % of the map)
+        rows, cols = np.flatnonzero(np.any(mask > 0, axis=1)), np.flatnonzero(np.any(mask > 0, axis=0))
+        if len(rows):
+            box = np.s_[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]
+            m = np.clip(mask[box], 0, 1).astype(np.float32)[..., None]
+            img[box] += (lab_to_linear_rgb(target_lab).astype(np.float32) - img[box]) * m
         return img
 
     if "lips" in masks:
