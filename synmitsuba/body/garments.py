@@ -29,6 +29,9 @@ CLEARANCE = 0.002
 HANG = (0.85, 19.0, 0.014, 0.12)
 TUCK = 0.03  # metres under the waist a top worn with a skirt ends
 SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
+# a skirt's weights: from the hip line's own down to both legs' over this drop (metres), and a point
+# this share of its ring's radius to one side of the centre follows that side's leg alone
+LEGS_BLEND, LEGS_SIDE = 0.08, 0.7
 GROUPS = {
     "torso": ("root", "pelvis", "spine", "clavicle", "shoulder01"),
     "upperarm": ("upperarm",), "lowerarm": ("lowerarm",), "hand": ("wrist", "finger", "metacarpal"),
@@ -81,20 +84,25 @@ class GarmentKind:
     length: tuple[float, float]   # sampled length range
     ease: tuple[float, float] = (0.0, 0.015)
     thickness: tuple[float, float] = (0.002, 0.006)
+    fabric: str = "plain"         # textures.FABRICS: the thread-scale normal map a texture's weave "auto" takes
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
 GARMENTS: dict[str, GarmentKind] = {
-    "tshirt": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.15 + 0.25 * L), (0.2, 0.7)),
-    "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8)),
+    "tshirt": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.15 + 0.25 * L), (0.2, 0.7),
+                          fabric="jersey"),
+    "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8),
+                              fabric="jersey"),
     "jacket": GarmentKind(Layer.TOP, 0.03, 3, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
-                          (0.005, 0.03), (0.002, 0.01)),
-    "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45)),
-    "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0)),
+                          (0.005, 0.03), (0.002, 0.01), fabric="twill"),
+    "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
+                            fabric="twill"),
+    "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                              fabric="twill"),
     "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03)),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
                          (0.005, 0.03)),
-    "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8)),
+    "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none"),
 }
 KINDS = tuple(GARMENTS)
 # outfits sample_subject draws from (a jacket and shoes are added by chance)
@@ -280,6 +288,59 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
         v, f, uv = _hem(body, v, f, uv, g.thickness)
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
+
+
+def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Skinning weights for a skirt (or a dress's skirt) that hangs from the hips over both legs.
+    Closest-point binding gives each point one leg, so a stride tears the front and back apart
+    along where the binding switches legs and drives the hem between the knees into one of them.
+    Below the hips, a point takes the weights at its closest point on the body's left half and
+    on its right half, mixed by how far to that side it is (half and half at the front and back
+    centre, one leg alone from ``LEGS_SIDE`` of the ring's radius out), blended in from the hip
+    line over ``LEGS_BLEND``."""
+    from synmitsuba.body.binding import MeshIndex
+    down = np.clip((r.hip_y - v[:, 1]) / LEGS_BLEND, 0.0, 1.0)
+    rows = np.flatnonzero(down > 0)
+    if not len(rows):
+        return weights
+    legs = np.isin(r.group, ["torso", "upperleg", "lowerleg"])
+    cx, cz = body.vertices[legs & (body.vertices[:, 1] < r.hip_y), :][:, [0, 2]].mean(0)
+    p = v[rows]
+    side_w = []
+    for side in (1.0, -1.0):  # each half: its vertices, and the faces with all three among them
+        keep = side * (body.vertices[:, 0] - cx) >= 0.0
+        faces = body.faces[keep[body.faces].all(1)]
+        index = np.cumsum(keep) - 1
+        half = MeshIndex(body.vertices[keep], index[faces])
+        _, tri, bary = half.closest(p)
+        side_w.append(np.einsum("nk,nkj->nj", bary, body.weights[faces[tri]]))
+    radius = np.maximum(np.hypot(p[:, 0] - cx, p[:, 2] - cz), 1e-6)
+    s = np.clip(0.5 + 0.5 * (p[:, 0] - cx) / (LEGS_SIDE * radius), 0.0, 1.0)[:, None]
+    mixed = s * side_w[0] + (1 - s) * side_w[1]
+    out = weights.astype(np.float64).copy()
+    t = down[rows, None]
+    out[rows] = (1 - t) * out[rows] + t * mixed
+    out /= np.maximum(out.sum(1, keepdims=True), 1e-12)
+    return out.astype(weights.dtype)
+
+
+def metres_per_uv(v: np.ndarray, f: np.ndarray, uv: np.ndarray) -> tuple[float, float]:
+    """Metres of surface per unit u and per unit v of a mesh's texture mapping (the area-weighted
+    median of each face's |dp/du| and |dp/dv|): how many thread tiles a garment's uv square holds."""
+    e1, e2 = v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]
+    d1, d2 = uv[f[:, 1]] - uv[f[:, 0]], uv[f[:, 2]] - uv[f[:, 0]]
+    det = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    ok = np.abs(det) > 1e-12
+    inv = 1.0 / np.where(ok, det, 1.0)
+    dpdu = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * inv[:, None]
+    dpdv = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * inv[:, None]
+    area = np.linalg.norm(np.cross(e1, e2), axis=1) * ok
+
+    def median(x):
+        order = np.argsort(x)
+        c = np.cumsum(area[order])
+        return float(x[order][np.searchsorted(c, c[-1] / 2)]) if c[-1] > 0 else 1.0
+    return median(np.linalg.norm(dpdu, axis=1)), median(np.linalg.norm(dpdv, axis=1))
 
 
 def _over_torso(body, r: BodyRegions, v: np.ndarray) -> np.ndarray:

@@ -12,7 +12,8 @@ from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
 from synmitsuba.body.collide import GarmentCollider, Surface, incidence
-from synmitsuba.body.garments import GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment, garment_offset
+from synmitsuba.body.garments import (GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights, build_garment,
+                                      garment_offset, metres_per_uv)
 from synmitsuba.body.hair import (Strands, grow_hair, hair_colour, hair_material, root_cover,
                                   scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
@@ -110,9 +111,13 @@ class LayeredHuman:
                 below = max(below, m.offset)
             self.garments.append(m)
             b = bind(body.vertices, body.faces, body.weights, m.vertices, body.surface())
-            self.parts.append(_Part(g.kind, m.layer, garment_material(g.texture, size), m.vertices, m.faces, m.uv,
-                                    b.weights, GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset),
-                                                               body.faces[b.triangle], b.barycentric)))
+            kind = GARMENTS[g.kind]
+            weights = both_legs_weights(body, self.regions, m.vertices, b.weights) if "flare" in kind.shape else b.weights
+            material = garment_material(g.texture, size, fabric=kind.fabric,
+                                        metres_per_uv=metres_per_uv(m.vertices, m.faces, m.uv))
+            collider = GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset), body.faces[b.triangle],
+                                       b.barycentric)
+            self.parts.append(_Part(g.kind, m.layer, material, m.vertices, m.faces, m.uv, weights, collider))
         garments = self.parts[1:]
         for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
             part.inner = part.name != "shoes" and any(q.name != "shoes" for q in garments[k + 1:])

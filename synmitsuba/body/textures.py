@@ -20,6 +20,11 @@ from synmitsuba.schema import Check, Choice, Number, Params, Vector, spec
 PATTERNS = ("none", "stripes", "checks", "plaid", "dots", "camouflage", "gradient")
 DECALS = ("none", "circle", "star", "band", "number")
 BUMPS = ("none", "knit", "ribbed", "noise", "denim", "weave")
+FABRICS = ("none", "plain", "twill", "jersey")
+# one tile of each fabric's normal map spans this much cloth (metres): two plain-weave threads
+# each way, one 4-thread twill repeat, two jersey wales
+FABRIC_TILE_M = {"plain": 0.0024, "twill": 0.004, "jersey": 0.004}
+MAX_SLOPE = np.tan(np.radians(60.0))
 ITA_RANGE = (-60.0, 65.0)
 
 
@@ -68,6 +73,8 @@ class GarmentTextureParams(Params):
     bump: str = spec("none", Choice(BUMPS))
     bump_amplitude: float = spec(0.5, Number(0, 1))
     bump_scale: float = spec(40.0, Number(2, 200))
+    weave: str = spec("auto", Choice(("auto",) + FABRICS),
+                      doc="thread-scale normal map: auto takes the garment kind's fabric")
     uv_scale: float = spec(1.0, Number(0.1, 10))
     uv_rotation_deg: float = spec(0.0, Number(-180, 180))
     uv_offset: list = spec(factory=lambda: [0.0, 0.0], check=Vector(2, -10, 10, "uv"))
@@ -248,11 +255,57 @@ def render_garment_texture(p: GarmentTextureParams, size: int = 256) -> tuple[np
     return img.astype(np.float32), _height(p, x, y, size).astype(np.float32)
 
 
-def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float = 0.8):
+def fabric_height(fabric: str, size: int = 64) -> np.ndarray:
+    """One periodic tile (size, size) of a fabric's thread relief in [0, 1]: ``plain`` weave
+    (warp over weft in alternate cells, 2 threads each way), a 2/2 ``twill`` (each thread over
+    two, under two, shifted one a row: diagonal wales, 4 threads each way) or ``jersey`` knit
+    (2 wales of V-shaped loops)."""
+    t = (np.arange(size) + 0.5) / size
+    x, y = np.meshgrid(t, t)
+    if fabric in ("plain", "twill"):
+        n = 2 if fabric == "plain" else 4
+        u, v = n * x, n * y
+        over = (np.floor(u) + np.floor(v)) % 2 == 0 if fabric == "plain" else (np.floor(u) - np.floor(v)) % 4 < 2
+        across_u, across_v = np.abs(np.sin(np.pi * u)), np.abs(np.sin(np.pi * v))  # 0 between threads, 1 on top
+        # on top in a cell: the warp (rounded across u, dipping where it goes under) or the weft
+        return np.where(over, np.sqrt(across_u) * (0.7 + 0.3 * across_v), np.sqrt(across_v) * (0.7 + 0.3 * across_u))
+    if fabric == "jersey":
+        a, b = (2 * x) % 1.0 - 0.5, (2 * y) % 1.0  # across a wale (centred), up a course
+        leg = np.abs(a) - (0.08 + 0.3 * b)        # across each leg of the loop's V, widening upwards
+        return np.sqrt(np.clip(1.0 - (leg / 0.16) ** 2, 0.0, 1.0)) * np.sin(np.pi * b) ** 0.3  # loops tuck under at a course's ends
+    return np.zeros((size, size))
+
+
+def fabric_normal_map(fabric: str, size: int = 64, relief: float = 0.12) -> np.ndarray:
+    """Tangent-space normal map (size, size, 3), [0, 1]-encoded, of one tile of ``fabric``:
+    normals of the periodic relief ``fabric_height`` scaled to ``relief`` of the tile's side
+    (central differences, wrapped, so tiles join without a seam), leaning at most 60 degrees."""
+    h = fabric_height(fabric, size) * relief * size  # in texels
+    dx = (np.roll(h, -1, 1) - np.roll(h, 1, 1)) / 2
+    dy = (np.roll(h, -1, 0) - np.roll(h, 1, 0)) / 2
+    g = np.hypot(dx, dy)
+    cap = np.minimum(1.0, MAX_SLOPE / np.maximum(g, 1e-12))  # the gaps between threads are steep: no normal
+    dx, dy = dx * cap, dy * cap                                # leans so far that it faces away from the light
+    n = np.stack([-dx, -dy, np.ones_like(h)], -1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return (0.5 * n + 0.5).astype(np.float32)
+
+
+def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float = 0.8, fabric: str = "none",
+                     metres_per_uv=(1.0, 1.0)):
+    """The garment's material: albedo and pattern bump at ``size``, and where its fabric (``p.weave``,
+    or ``fabric`` for auto) has one, a thread-scale normal map tiled over the uv square as
+    often as ``metres_per_uv`` (metres of cloth per unit u and v) holds tiles."""
     from synmitsuba.scene.materials import Material
     albedo, height = render_garment_texture(p, size)
+    weave = fabric if p.weave == "auto" else p.weave
+    normal, repeat = None, (1.0, 1.0)
+    if weave != "none":
+        normal = fabric_normal_map(weave)
+        repeat = tuple(max(1.0, round(m / FABRIC_TILE_M[weave])) for m in metres_per_uv)
     return Material(texture=albedo, bump=height if p.bump != "none" else None, bump_scale=0.002,
-                    kind="principled", roughness=roughness, specular=0.3)
+                    kind="principled", roughness=roughness, specular=0.3, normal_map=normal,
+                    normal_map_repeat=repeat)
 
 
 # -- skin ------------------------------------------------------------------------------

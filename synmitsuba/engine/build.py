@@ -41,10 +41,14 @@ def bsdf_dict(mat: Material) -> dict:
         bsdf = {"type": "diffuse", "reflectance": color}
     if mat.two_sided:
         bsdf = {"type": "twosided", "bsdf": bsdf}
-    if mat.normal_map is not None:
-        bsdf = {"type": "normalmap", "normalmap": _bitmap(mat.normal_map), "bsdf": bsdf}
-    elif mat.bump is not None:
+    if mat.bump is not None:
         bsdf = {"type": "bumpmap", "height": _bitmap(mat.bump), "scale": float(mat.bump_scale), "bsdf": bsdf}
+    if mat.normal_map is not None:
+        tiles = _bitmap(mat.normal_map)
+        if mat.normal_map_repeat != (1.0, 1.0):
+            import mitsuba as mi
+            tiles["to_uv"] = mi.ScalarTransform4f().scale([*mat.normal_map_repeat, 1.0])
+        bsdf = {"type": "normalmap", "normalmap": tiles, "bsdf": bsdf}
     return bsdf
 
 

@@ -58,7 +58,8 @@ class Material:
     melanin per strand (replacing ``melanin``): locks of slightly different shade.
     ``texture`` replaces ``base_color``; ``roughness_map`` (H, W in [0, 1]) replaces
     ``roughness`` for ``principled``; ``bump`` (H, W height map, scaled by ``bump_scale``)
-    or ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded) perturb shading normals.
+    and ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded, repeated ``normal_map_repeat``
+    (u, v) times over the uv square; over the bump when both are given) perturb shading normals.
     """
 
     base_color: tuple = (0.5, 0.5, 0.5)
@@ -70,6 +71,7 @@ class Material:
     bump: np.ndarray | None = None
     bump_scale: float = 1.0
     normal_map: np.ndarray | None = None
+    normal_map_repeat: tuple = (1.0, 1.0)
     roughness_map: np.ndarray | None = None
     two_sided: bool = True
     melanin: float = 0.3
@@ -95,6 +97,10 @@ class Material:
             self.bump = _image("material.bump", self.bump, None)
         if self.normal_map is not None:
             self.normal_map = _image("material.normal_map", self.normal_map, 3)
+        rep = np.asarray(self.normal_map_repeat, np.float64).ravel()
+        if rep.size != 2 or not np.isfinite(rep).all() or (rep <= 0).any():
+            raise ConfigError("material.normal_map_repeat", self.normal_map_repeat, "give two positive repeats (u, v)")
+        self.normal_map_repeat = (float(rep[0]), float(rep[1]))
         if self.roughness_map is not None:
             self.roughness_map = _image("material.roughness_map", self.roughness_map, None)
             if self.roughness_map.min() < 0 or self.roughness_map.max() > 1:
