@@ -536,6 +536,36 @@ def test_glasses_sit_on_the_eyes_and_the_cap_hugs_the_skull(seed):
     assert len(h.hair) > 0 and not under_cap(h.head, h.hair.points[:, 0]).any()
 
 
+def test_cap_crown_ends_on_its_edge_line_and_the_bill_is_a_peak():
+    """The crown's open edge follows the cap's line (3 cm over the eyes at the front, 3 cm lower
+    for every 10 cm back; written out here) within 4 mm, not the head's triangle edges (up to
+    2 cm off); the bill is a peak over the brow: in front of the forehead, no wider than the
+    head and 1 cm, 5-9 cm long, its sides lower than its middle."""
+    from synmitsuba.geometry import frame
+    h = sm.build_subject(sm.sample_subject(np.random.default_rng(3), {"accessories": ["cap"], "texture_size": 64}))
+    part = next(p for p in h.parts if p.name == "cap")
+    R, c = frame(h.head["forward"], h.head["up"]), h.head["centre"]
+    v = (part.rest - c) @ R
+    eyes = ((h.head["eyes"] - c) @ R).mean(0)
+    head = (h.body.vertices[h.head["mask"]] - c) @ R
+    brow = head[np.abs(head[:, 1] - eyes[1] - 0.03) < 0.01]
+    bill = v[:, 2] > brow[:, 2].max() + 0.012
+    edges = np.sort(np.concatenate([part.faces[:, [0, 1]], part.faces[:, [1, 2]], part.faces[:, [2, 0]]]), 1)
+    uniq, count = np.unique(edges, axis=0, return_counts=True)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    piece = connected_components(coo_matrix((np.ones(len(uniq)), tuple(uniq.T)), shape=(len(v),) * 2))[1]
+    crown = piece == np.bincount(piece).argmax()
+    rim = np.unique(uniq[count == 1])
+    rim = rim[crown[rim] & (v[rim, 2] < brow[:, 2].max() - 0.03)]  # the crown's edge at the sides and back
+    line = eyes[1] + 0.03 - 0.3 * (eyes[2] - v[rim, 2])
+    assert len(rim) > 20 and np.abs(v[rim, 1] - line).max() < 0.004
+    assert bill.sum() > 20 and np.abs(v[bill, 0]).max() < np.abs(brow[:, 0]).max() + 0.01
+    assert 0.05 < v[bill, 2].max() - brow[:, 2].max() < 0.09
+    mid, sides = bill & (np.abs(v[:, 0]) < 0.01), bill & (np.abs(v[:, 0]) > 0.05)
+    assert v[sides, 1].mean() < v[mid, 1].mean()
+
+
 @pytest.mark.parametrize("seed", [0, 3])
 def test_mask_covers_nose_and_mouth_and_headphones_sit_on_the_ears(seed):
     """Against anny's keypoints: the mask spans the nose keypoint's height, stays below the

@@ -82,44 +82,60 @@ def _temple(face: np.ndarray, mid: np.ndarray, x: int, front: float, back: float
     return out
 
 
-def under_cap(head, points: np.ndarray) -> np.ndarray:
-    """Which points lie above a cap's edge: a line 3 cm above the eyes at the front, dropping 3 cm
-    for every 10 cm towards the back (hair rooted there is hidden under a cap)."""
+def _cap_line(head, v: np.ndarray) -> np.ndarray:
+    """Height of head-frame points ``v`` over a cap's edge: a line 3 cm above the eyes at the
+    front, dropping 3 cm for every 10 cm towards the back."""
     R, c = _local(head)
-    v, mid = (np.asarray(points) - c) @ R, ((head["eyes"] - c) @ R).mean(0)
-    return v[:, 1] > mid[1] + 0.03 - 0.3 * (mid[2] - v[:, 2])
+    mid = ((head["eyes"] - c) @ R).mean(0)
+    return v[:, 1] - (mid[1] + 0.03 - 0.3 * (mid[2] - v[:, 2]))
+
+
+def under_cap(head, points: np.ndarray) -> np.ndarray:
+    """Which points lie above a cap's edge (hair rooted there is hidden under a cap)."""
+    R, c = _local(head)
+    return _cap_line(head, (np.asarray(points) - c) @ R) > 0
+
+
+CAP_BILL = (0.07, 55.0, 0.012, 0.15)  # length (m, at scale 1), half-span (deg), side droop (m), downward pitch
 
 
 def _cap(p: AccessoryParams, body, head):
-    """A crown that follows the skull 9 mm off the scalp (loop-subdivided once) (the head's own surface above a line
-    from the brows, dropping towards the back) and a two-sided brim whose inner edge follows the
-    forehead."""
+    """A crown that follows the skull 9 mm off the scalp, cut along the cap's edge line (the
+    triangles split on it, so the edge is a smooth curve; loop-subdivided once), and a bill: a
+    D-shaped peak over the brow, ``CAP_BILL`` long, spanning the front half-span either side,
+    curved down at its sides and pitched down, 4 mm thick with a closed rim."""
+    import trimesh
     R, c = _local(head)
     v = (body.vertices - c) @ R
-    front_y = ((head["eyes"] - c) @ R).mean(0)[1] + 0.03
-    crown = head["mask"] & under_cap(head, body.vertices)
-    used, f = submesh(body.faces, crown)
-    import trimesh
-    dome = trimesh.Trimesh(v[used] + vertex_normals(body.vertices, body.faces)[used] @ R * 0.009, f, process=False)
-    dome = dome.subdivide_loop(1)  # smooth: the body's head is too coarse for a shiny crown
+    used, f = submesh(body.faces, head["mask"])
+    n = vertex_normals(body.vertices, body.faces)[used] @ R
+    f, dome = cut(f, _cap_line(head, v[used]), v[used] + n * 0.009)
+    dome = trimesh.Trimesh(dome, f, process=False).subdivide_loop(1)  # the body's head is too coarse for a shiny crown
     dome, f = np.asarray(dome.vertices), np.asarray(dome.faces)
-    # the brim: inner edge on the head's outline at brow height, 7 cm out at the front, less at the sides
-    ring = v[head["mask"] & (np.abs(v[:, 1] - front_y) < 0.012)]
-    phi = np.radians(np.linspace(-75, 75, 31))
+    bill = _bill(v[head["mask"]], ((head["eyes"] - c) @ R).mean(0)[1] + 0.03, p.scale)
+    return np.concatenate([dome, bill[0]]) @ R.T + c, np.concatenate([f, bill[1] + len(dome)])
+
+
+def _bill(head_v: np.ndarray, front_y: float, scale: float, n: int = 31):
+    """The cap's bill in the head frame: (vertices, faces) of its top, bottom and outer rim."""
+    length, span, droop, pitch = CAP_BILL
+    ring = head_v[np.abs(head_v[:, 1] - front_y) < 0.012]
+    phi = np.radians(np.linspace(-span, span, n))
     ang = np.arctan2(ring[:, 0], ring[:, 2])
-    r_in = np.array([np.hypot(ring[:, 0], ring[:, 2])[np.abs(ang - a) < np.radians(6)].max() for a in phi]) + 0.01
-    r_out = r_in + 0.07 * np.cos(phi) ** 0.7 * p.scale
-    direction = np.column_stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)])
-    y = np.array([0.0, front_y, 0.0])
-    inner, outer = r_in[:, None] * direction + y, r_out[:, None] * direction + y
-    n = len(phi)
-    verts = np.concatenate([inner, outer, inner - [0, 0.004, 0], outer - [0, 0.004, 0]])
-    quads = [(i, i + 1, n + i + 1, n + i) for i in range(n - 1)]
-    top = [(a, c_, b) for a, b, c_, d in quads] + [(a, d, c_) for a, b, c_, d in quads]
-    bottom = [(a + 2 * n, b + 2 * n, c_ + 2 * n) for a, b, c_, d in quads] + \
-             [(a + 2 * n, c_ + 2 * n, d + 2 * n) for a, b, c_, d in quads]
-    brim_f = np.array(top + bottom) + len(dome)
-    return np.concatenate([dome, verts]) @ R.T + c, np.concatenate([f, brim_f])
+    # inner edge 5 mm off the head's outline at the crown's edge (under the crown, 9 mm off: no gap shows)
+    r_in = np.array([np.hypot(ring[:, 0], ring[:, 2])[np.abs(ang - a) < np.radians(6)].max() for a in phi]) + 0.005
+    reach = length * scale * np.cos(phi * 90.0 / span) ** 0.5 + 0.004  # straight ahead: a D no wider than the head
+    side = (np.sin(phi) / np.sin(np.radians(span))) ** 2
+    inner = np.column_stack([r_in * np.sin(phi), np.full(n, front_y + 0.003), r_in * np.cos(phi)])
+    outer = inner + np.column_stack([np.zeros(n), -0.003 - droop * side - pitch * reach, reach])
+    rows = [inner, outer, outer - [0, 0.004, 0], inner - [0, 0.004, 0]]  # top inner, top outer, bottom outer, bottom inner
+    verts = np.concatenate(rows)
+    faces = []
+    for k in range(3):  # top, rim, bottom: quads between consecutive rows
+        a = k * n + np.arange(n - 1)
+        b = a + n
+        faces += [np.column_stack([a, b, a + 1]), np.column_stack([a + 1, b, b + 1])]
+    return verts, np.concatenate(faces)
 
 
 def _headphones(p: AccessoryParams, body, head):
