@@ -142,10 +142,9 @@ def _openings(vertices, faces) -> np.ndarray:
     return edges[(counts == 1) & (edges[:, 0] != edges[:, 1])], inv
 
 
-def _boundary_turning(vertices, faces) -> list[float]:
-    """Per boundary loop (vertices merged by position, so UV seams are not edges): the sum of
-    |turning angles| between successive boundary edges within the surface's tangent plane, per
-    metre of loop. A saw-tooth turns at every vertex; a smooth hem hardly at all."""
+def _boundary_loops(vertices, faces) -> list:
+    """Per boundary loop of 8 vertices or more (vertices merged by position, so UV seams are not
+    edges): its points and their surface normals, in order."""
     from synmitsuba.geometry import vertex_normals
     _, first, inv = np.unique(np.round(vertices, 6), axis=0, return_index=True, return_inverse=True)
     v, f = vertices[first], inv.ravel()[faces]
@@ -167,14 +166,48 @@ def _boundary_turning(vertices, faces) -> list[float]:
             prev, cur = cur, step[0]
             loop.append(cur)
         seen.update(loop)
-        if len(loop) < 8:
-            continue
-        p, nn = v[loop], n[loop]
+        if len(loop) >= 8:
+            out.append((v[loop], n[loop]))
+    return out
+
+
+def _boundary_turning(vertices, faces) -> list[float]:
+    """Per boundary loop: the sum of |turning angles| between successive boundary edges within
+    the surface's tangent plane, per metre of loop. A saw-tooth turns at every vertex; a smooth
+    hem hardly at all."""
+    out = []
+    for p, nn in _boundary_loops(vertices, faces):
         flat = lambda d: d - (d * nn).sum(1, keepdims=True) * nn  # noqa: E731
         a, b = flat(p - np.roll(p, 1, 0)), flat(np.roll(p, -1, 0) - p)
         turn = np.abs(np.arctan2((np.cross(a, b) * nn).sum(1), (a * b).sum(1))).sum()
         out.append(turn / np.linalg.norm(np.roll(p, -1, 0) - p, axis=1).sum())
     return out
+
+
+def test_necklines_run_round_the_neck_without_a_step():
+    """A t-shirt's neck opening (its highest loop) turns by at most 120 degrees within any 3 cm
+    of it (a level cut at the neck's height made a notch where the torso met the shoulders:
+    150-185 degrees on these subjects), stays off the neck (at least most of the ease out from
+    the neck's axis, measured here from anny's neck ring) and is lowest at the front."""
+    from synmitsuba.body.garments import NECK_EASE
+    for seed in (3, 4):
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"outfit": ["tshirt", "trousers"],
+                                                                             "texture_size": 64}))
+        g = next(g for g in h.garments if g.params.kind == "tshirt")
+        p, nn = max(_boundary_loops(g.vertices, g.faces[:len(g.faces) - g.hem[0]]), key=lambda lp: lp[0][:, 1].mean())
+        flat = lambda d: d - (d * nn).sum(1, keepdims=True) * nn  # noqa: E731
+        a, b = flat(p - np.roll(p, 1, 0)), flat(np.roll(p, -1, 0) - p)
+        turn = np.abs(np.arctan2((np.cross(a, b) * nn).sum(1), (a * b).sum(1)))
+        s = np.cumsum(np.linalg.norm(np.roll(p, -1, 0) - p, axis=1))
+        twice, s2 = np.concatenate([turn, turn]), np.concatenate([s, s + s[-1]])
+        worst = max(twice[i:np.searchsorted(s2, s2[i] + 0.03)].sum() for i in range(len(turn)))
+        assert np.degrees(worst) < 120, (seed, np.degrees(worst))
+        neck = h.body.vertices[h.regions.group == "head"]
+        ring = neck[np.abs(neck[:, 1] - h.regions.neck_y - 0.03) < 0.01][:, [0, 2]]
+        centre = ring.mean(0)
+        rho = np.linalg.norm(p[:, [0, 2]] - centre, axis=1)
+        assert rho.min() > np.median(np.linalg.norm(ring - centre, axis=1)) + 0.5 * NECK_EASE
+        assert p[np.argmin(p[:, 1]), 2] > centre[1]  # lowest in front of the neck's axis
 
 
 def test_garment_edges_follow_smooth_curves():

@@ -50,9 +50,28 @@ def _top(sleeve: Callable[[float], float], dress: bool = False):
         y = v[:, 1]
         hem = r.waist_y - (r.waist_y - (r.crotch_y - 0.12)) * (0.6 if dress else g.length)
         arms = np.isin(r.group, ["upperarm", "lowerarm", "hand"])
-        phi = np.where(arms, (sleeve(g.length) - r.arm_s) * r.arm_length, np.minimum(y - hem, r.neck_y - y))
+        phi = np.where(arms, (sleeve(g.length) - r.arm_s) * r.arm_length, y - hem)
+        phi = np.minimum(phi, _neckline(r, v))
         return np.minimum(phi, y - (r.hip_y - 0.02)) if dress else phi  # a dress's skirt is a flared surface
     return region
+
+
+NECK_EASE = 0.012           # metres a neckline stands off the neck, around its base
+NECK_DROP = (0.012, 0.03)   # metres under the neck's base a neckline reaches at the back, at the front
+
+
+def _neckline(r, v: np.ndarray) -> np.ndarray:
+    """A crew neckline's field (>= 0 covered): a point is covered if it is farther than the
+    neck's radius and ``NECK_EASE`` from the neck's axis or lower than the neckline's lowest
+    reach (``NECK_DROP``, deeper at the front), and in any case not over 4 cm above the neck's
+    base. So the edge runs round the neck over the trapezius and dips onto the chest at the
+    front, and one field for every body group leaves no step where the torso meets the
+    shoulders (a level cut at the neck's height stepped there)."""
+    dx, dz = v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1]
+    rho = np.hypot(dx, dz)
+    front = np.clip(dz / np.maximum(rho, 1e-9), 0.0, 1.0)  # cos of the angle from straight ahead (+z)
+    low = r.neck_y - (NECK_DROP[0] + (NECK_DROP[1] - NECK_DROP[0]) * front)
+    return np.minimum(np.maximum(rho - (r.neck_radius + NECK_EASE), low - v[:, 1]), r.neck_y + 0.04 - v[:, 1])
 
 
 def _bottom(reach: Callable[[float], float]):
@@ -142,6 +161,8 @@ class BodyRegions:
     hip_y: float
     crotch_y: float
     neck_y: float
+    neck_xz: tuple = (0.0, 0.0)  # the neck's axis (x, z) just above its base
+    neck_radius: float = 0.06    # and its radius there (75th percentile: the outer surface)
 
 
 def body_regions(body) -> BodyRegions:
@@ -164,9 +185,13 @@ def body_regions(body) -> BodyRegions:
         arm_len.append(np.linalg.norm(axis))
         leg_len.append(hip[1] - ank[1])
     hip_y = float(sk.rest_positions[sk.index("upperleg01.L"), 1])
+    neck_y = float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01
+    ring = v[(group == "head") & (np.abs(v[:, 1] - neck_y - 0.03) < 0.01)][:, [0, 2]]
+    centre = ring.mean(0)
     return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s, float(np.mean(arm_len)), float(np.mean(leg_len)),
-                       waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y,
-                       crotch_y=hip_y - 0.07, neck_y=float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01)
+                       waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y, crotch_y=hip_y - 0.07,
+                       neck_y=neck_y, neck_xz=(float(centre[0]), float(centre[1])),
+                       neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)))
 
 
 def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, n_seg: int = 48):
