@@ -58,20 +58,24 @@ def _top(sleeve: Callable[[float], float], dress: bool = False):
 
 NECK_EASE = 0.012           # metres a neckline stands off the neck, around its base
 NECK_DROP = (0.012, 0.03)   # metres under the neck's base a neckline reaches at the back, at the front
+NECK_ROUND = 0.02           # metres over which the neckline turns from the front's dip to round the neck
 
 
 def _neckline(r, v: np.ndarray) -> np.ndarray:
     """A crew neckline's field (>= 0 covered): a point is covered if it is farther than the
     neck's radius and ``NECK_EASE`` from the neck's axis or lower than the neckline's lowest
     reach (``NECK_DROP``, deeper at the front), and in any case not over 4 cm above the neck's
-    base. So the edge runs round the neck over the trapezius and dips onto the chest at the
+    base (the union rounded over ``NECK_ROUND``, or the edge has a corner where it leaves the
+    dip). So the edge runs round the neck over the trapezius and dips onto the chest at the
     front, and one field for every body group leaves no step where the torso meets the
     shoulders (a level cut at the neck's height stepped there)."""
     dx, dz = v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1]
     rho = np.hypot(dx, dz)
     front = np.clip(dz / np.maximum(rho, 1e-9), 0.0, 1.0)  # cos of the angle from straight ahead (+z)
     low = r.neck_y - (NECK_DROP[0] + (NECK_DROP[1] - NECK_DROP[0]) * front)
-    return np.minimum(np.maximum(rho - (r.neck_radius + NECK_EASE), low - v[:, 1]), r.neck_y + 0.04 - v[:, 1])
+    a, b = rho - (r.neck_radius + NECK_EASE), low - v[:, 1]
+    either = 0.5 * (a + b + np.sqrt((a - b) ** 2 + NECK_ROUND ** 2))  # max(a, b), rounded where the two meet
+    return np.minimum(either, r.neck_y + 0.04 - v[:, 1])
 
 
 def _bottom(reach: Callable[[float], float]):
