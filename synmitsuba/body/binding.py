@@ -42,10 +42,14 @@ def closest_points(vertices, faces, points, k: int = 4, tree=None, around=None) 
 
 def closest_on_faces(vertices, faces, points, cand) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``closest_points`` among given candidate faces (N, C) per point, -1 for none. A face
-    listed twice for a point (around two of its nearest vertices) is measured once."""
+    listed twice for a point (around two of its nearest vertices) is measured once, and ties go
+    to the face listed first (nearest vertex first), as when every listing was measured: sorting
+    the faces instead broke ties by face index and moved a few pushed vertices by 5 mm under a
+    rigid move of the whole pose."""
     import trimesh
-    cand = np.sort(cand, axis=1)
-    cand[:, 1:][cand[:, 1:] == cand[:, :-1]] = -1
+    cand = np.array(cand, copy=True)
+    for j in range(cand.shape[1] - 1, 0, -1):
+        cand[(cand[:, :j] == cand[:, j:j + 1]).any(1), j] = -1
     rows, cols = np.nonzero(cand >= 0)
     cp = trimesh.triangles.closest_point(vertices[faces[cand[rows, cols]]], points[rows])
     dist = np.full(cand.shape, np.inf)
