@@ -123,3 +123,12 @@ def test_8bit_maps_are_data_and_8bit_textures_are_srgb(sm):
     assert np.allclose(m.normal_map[..., :2], 128 / 255) and np.allclose(m.normal_map[..., 2], 1.0)
     assert np.allclose(m.roughness_map, 128 / 255)
     assert np.allclose(sm.Material(bump=grey[..., 0]).bump, 128 / 255)
+
+
+def test_normal_map_repeat_is_checked(sm):
+    """Two positive finite repeats (u, v), kept as floats; anything else names the field."""
+    from synmitsuba.errors import ConfigError
+    assert sm.Material(normal_map_repeat=[3, 2]).normal_map_repeat == (3.0, 2.0)
+    for bad in ((0, 1), (1, -2), (1,), (1, float("nan"))):
+        with pytest.raises(ConfigError, match="material.normal_map_repeat"):
+            sm.Material(normal_map_repeat=bad)

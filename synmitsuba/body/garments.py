@@ -374,8 +374,7 @@ def metres_per_uv(v: np.ndarray, f: np.ndarray, uv: np.ndarray) -> tuple[float, 
 
 def _over_torso(body, r: BodyRegions, v: np.ndarray) -> np.ndarray:
     """(N,) True for shell points whose closest body vertex is on the torso (not the arms)."""
-    from scipy.spatial import cKDTree
-    return r.group[cKDTree(body.vertices).query(v)[1]] == "torso"
+    return r.group[body.surface().tree.query(v)[1]] == "torso"
 
 
 def _open_edges(f: np.ndarray, merged: np.ndarray) -> np.ndarray:
