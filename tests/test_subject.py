@@ -320,7 +320,11 @@ def test_hair_falls_in_smooth_locks_from_a_part(human):
         u = np.diff(P, axis=1)
         u /= np.linalg.norm(u, axis=2, keepdims=True)
         turn = np.degrees(np.arccos(np.clip((u[:, 1:] * u[:, :-1]).sum(2), -1, 1)))
-        assert np.percentile(turn, 95) < 30, (style, np.percentile(turn, 95))  # measured 24, 24
+        # the first point, 0.5-1 cm from the root, is where a strand that left the scalp steeply
+        # lies down over it (p95 50-73 deg); past it, measured 16 and 16 (24 and 24 with evenly
+        # spaced points, whose 5 cm first chord ran inside the scalp and bared a strip at the part)
+        assert np.percentile(turn[:, 0], 95) < 90, (style, np.percentile(turn[:, 0], 95))
+        assert np.percentile(turn[:, 1:], 95) < 22, (style, np.percentile(turn[:, 1:], 95))
         _, j = cKDTree(P[:, 0]).query(P[:, 0], k=2)
         together = np.median(np.linalg.norm(P[:, -1] - P[j[:, 1], -1], axis=1))
         apart = np.median(np.linalg.norm(P[:, -1] - P[::-1, -1], axis=1))
@@ -332,6 +336,56 @@ def test_hair_falls_in_smooth_locks_from_a_part(human):
     root_x, tip_x = local[:, 0, 0], local[:, -1, 0]
     off_part = np.abs(root_x) > 0.01
     assert (np.sign(tip_x[off_part]) == np.sign(root_x[off_part])).mean() > 0.97
+
+
+def test_a_part_is_a_thin_line(human):
+    """Strands leave a part and lie over the scalp beside it: points of the top of the scalp 1-3
+    cm from a centre part have a strand (outside the head) within 4 mm (all but 17 % for long hair,
+    1 % for a bob; the rest lie under strands higher than that). Control points evenly
+    spaced along a long strand put its first chord inside the head and bared a 3-4 cm strip
+    (97 % of those points bare for long hair)."""
+    from scipy.spatial import cKDTree
+    from synmitsuba.body.hair import HairParams, grow_hair
+    from synmitsuba.geometry import frame
+    scalp = human.scalp
+    B = frame(scalp.forward, scalp.up).T
+    tri = scalp.vertices[scalp.faces[(scalp.region[scalp.faces] == 1).all(1)]]
+    w = np.random.default_rng(0).dirichlet((1, 1, 1), (len(tri), 20))
+    pts = np.einsum("fnk,fka->fna", w, tri).reshape(-1, 3)
+    x, z = ((pts - scalp.origin) @ B.T)[:, [0, 2]].T
+    band = (np.abs(x) > 0.01) & (np.abs(x) < 0.03) & (z > -0.03)  # beside the part, ahead of the crown
+    for style in ("long", "bob"):
+        s = grow_hair(HairParams(style=style, curliness=0.0, density=0.5, seed=3), scalp)
+        P = s.points[s.region < 5]
+        f = np.linspace(0, 1, 8, endpoint=False)[None, None, :, None]
+        dense = (P[:, :-1, None] * (1 - f) + P[:, 1:, None] * f).reshape(-1, 3)
+        outside = dense[signed_distance(scalp.vertices, scalp.faces, dense) > 0]
+        gap, _ = cKDTree(outside).query(pts[band])
+        assert (gap > 0.004).mean() < 0.25, (style, (gap > 0.004).mean())
+
+
+def test_an_afro_is_a_rounded_mass_of_coils(human):
+    """Seen from the front, an afro's outline is round (the farthest strand point in each 5-deg
+    sector varies little from sector to sector, and sideways it reaches no farther than it
+    rises), and its strands wind in coils: the path through 4 consecutive control points (median)
+    is 1.4 times the chord across them or more. Measured 0.040, sides 0.99-1.01 of the top, 1.78;
+    strands grown straight out as far as they are long gave 0.096, 1.24-1.28, 1.10 (a starburst)."""
+    from synmitsuba.body.hair import HairParams, grow_hair
+    from synmitsuba.geometry import frame
+    scalp = human.scalp
+    B = frame(scalp.forward, scalp.up).T
+    s = grow_hair(HairParams(style="afro", length=1.3, curliness=0.9, seed=4), scalp)
+    P = s.points[s.region < 5]
+    x, y = ((P.reshape(-1, 3) - scalp.origin) @ B.T)[:, :2].T
+    angle, radius = np.degrees(np.arctan2(y, x)), np.hypot(x, y)
+    top = (angle > 0) & (angle < 180)
+    outline = np.array([radius[top & (angle >= a) & (angle < a + 5)].max() for a in range(0, 180, 5)])
+    assert outline.std() / outline.mean() < 0.06, outline.std() / outline.mean()
+    assert outline[:3].mean() < outline[17:19].mean() * 1.1 and outline[-3:].mean() < outline[17:19].mean() * 1.1
+    path = np.linalg.norm(np.diff(P, axis=1), axis=2)
+    window = np.lib.stride_tricks.sliding_window_view(path[:, 1:], 3, axis=1).sum(-1)
+    chord = np.linalg.norm(P[:, 4:] - P[:, 1:-3], axis=2)
+    assert np.median(window / np.maximum(chord, 1e-9)) > 1.4, np.median(window / np.maximum(chord, 1e-9))
 
 
 def test_scalp_under_hair_takes_the_hair_colour(human):

@@ -5,7 +5,9 @@ geometrically in a head frame (origin at the head centre, up, forward). Each sty
 length per region, how strands fall (gravity), their volume, a parting and how much they clump.
 A few hundred guide strands are grown in small steps that slide over the rest body and around
 the face; thousands of thin, tapered children take the shape of their nearest guides (never
-across the part), gathered towards one guide's tip in locks. Strands are rigid with the head
+across the part), gathered towards one guide's tip in locks. Control points lie close together
+at the root, where a strand bends round the head. An afro is shortened into a rounded envelope
+(``ENVELOPES``); afro and curly strands wind in coils (``COILS``). Strands are rigid with the head
 bone; the scalp under them is tinted with the hair's colour (``hair_colour``, ``root_cover``).
 """
 from __future__ import annotations
@@ -33,7 +35,12 @@ STYLES = {
 }
 HAIRLINE_TOP, BANGS_TOP = 0.45, 0.15  # relative heights over the head centre: hair over the face stops there
 K = 10  # control points per strand: enough for a smooth fall and one or two curls
-SUBSTEPS = 4  # growth steps per segment
+SUBSTEPS = 4  # growth steps per segment on average
+# growth steps at which control points are kept: close together at the root, where a strand bends
+# round the head (a 5 cm chord across the scalp would run inside it and bare a strip along a part),
+# farther apart down the hanging length
+KEPT_STEPS = np.array([0, 1, 3, 5, 8, 12, 17, 23, 29, (K - 1) * SUBSTEPS])
+ARC = KEPT_STEPS / KEPT_STEPS[-1]  # each control point's share of the strand's length
 BEARDS = {"none": 0.0, "stubble": 0.004, "goatee": 0.025, "mustache": 0.015, "full": 0.035}
 
 
@@ -130,10 +137,14 @@ class Strands:
 
     @staticmethod
     def concat(parts: list["Strands"]) -> "Strands":
+        """One set of strands; parts with fewer control points are resampled to the most any has."""
         parts = [p for p in parts if len(p)]
         if not parts:
             return Strands(np.zeros((0, K, 3)), np.zeros((0, K)), np.zeros(0, np.int64))
-        return Strands(np.concatenate([p.points for p in parts]), np.concatenate([p.radius for p in parts]),
+        k = max(p.points.shape[1] for p in parts)
+        def fit(a):
+            return a if a.shape[1] == k else resample(a, k)
+        return Strands(np.concatenate([fit(p.points) for p in parts]), np.concatenate([fit(p.radius) for p in parts]),
                        np.concatenate([p.region for p in parts]))
 
 
@@ -245,10 +256,10 @@ def _grow(scalp, roots, normals, lengths, gravity, volume, curl, rng, comb, body
                 step = q - (p - d * seg)
                 d = step / np.maximum(np.linalg.norm(step, axis=1, keepdims=True), 1e-12)
                 p = q
-        if j % SUBSTEPS == 0:
-            pts[:, j // SUBSTEPS] = p
+        if j in KEPT_STEPS:
+            pts[:, np.searchsorted(KEPT_STEPS, j)] = p
     if curl > 0:
-        s = np.linspace(0, 1, K)[None, :]
+        s = ARC[None, :]
         phase = rng.uniform(0, 2 * np.pi, (len(roots), 1))
         a = 2 * np.pi * (0.5 + 1.5 * curl) * s + phase
         side = np.cross(tangent, normals)
@@ -285,7 +296,7 @@ def _children(guide_roots, guides, roots, key_g, key_c, clump, frizz, curl, rng)
     w = 1.0 / (dist + 0.004) ** 2
     w /= w.sum(1, keepdims=True)
     shape = np.einsum("nk,nkja->nja", w, guides[near] - guide_roots[near][:, :, None])
-    s = np.linspace(0, 1, K)[None, :, None]
+    s = ARC[None, :, None]
     pts = roots[:, None] + shape * rng.uniform(0.8, 1.0, (len(roots), 1, 1))
     g = near[:, 0]
     clumped = guides[g] + (roots - guide_roots[g])[:, None] * 0.35
@@ -376,8 +387,45 @@ PARTING = {"bald": ("back", 0.0), "buzz": ("back", 0.1), "short": ("side", 0.3),
            "afro": ("crown", 0.15), "fringe": ("side", 0.4)}
 
 
-def _taper(n: int, scale: float = 1.0) -> np.ndarray:
-    return np.broadcast_to(ROOT_RADIUS * scale * np.linspace(1.0, 0.33, K), (n, K)).copy()
+def _arc(k: int) -> np.ndarray:
+    """Each of ``k`` control points' share of its strand's length: ``ARC`` for grown strands,
+    even for resampled ones."""
+    return ARC if k == K else np.linspace(0.0, 1.0, k)
+
+
+def _taper(n: int, scale: float = 1.0, k: int = K) -> np.ndarray:
+    return np.broadcast_to(ROOT_RADIUS * scale * (1.0 - 0.67 * _arc(k)), (n, k)).copy()
+
+
+def resample(points: np.ndarray, k: int) -> np.ndarray:
+    """Strands (N, K', ...) with ``k`` control points evenly spaced along their length instead."""
+    x = np.interp(np.linspace(0.0, 1.0, k), _arc(points.shape[1]), np.arange(points.shape[1]))
+    i = np.minimum(x.astype(int), points.shape[1] - 2)
+    f = (x - i).reshape(1, -1, *([1] * (points.ndim - 2)))
+    return points[:, i] * (1 - f) + points[:, i + 1] * f
+
+
+# style -> coil radius (metres at curliness 1) of kinky hair: each strand winds round its path, one
+# turn per segment of the grown strand, drawn with COIL_POINTS points a turn
+COILS = {"afro": 0.004, "curly": 0.007}
+COIL_POINTS = 4
+
+
+def _coil(pts: np.ndarray, normals: np.ndarray, radius: float, rng) -> np.ndarray:
+    """Strands (N, K, 3) wound into a helix round their path: (K - 1) turns, ``COIL_POINTS`` points
+    a turn, a radius growing from the root to ``radius`` over the first fifth of the strand."""
+    k = (pts.shape[1] - 1) * COIL_POINTS + 1
+    path = resample(pts, k)
+    t = np.gradient(path, axis=1)
+    t /= np.maximum(np.linalg.norm(t, axis=2, keepdims=True), 1e-12)
+    ref = np.broadcast_to(normals[:, None], t.shape)
+    ref = np.where(np.abs((ref * t).sum(2, keepdims=True)) > 0.9, np.cross(t, [0.0, 1.0, 0.0]), ref)
+    n1 = np.cross(t, ref)
+    n1 /= np.maximum(np.linalg.norm(n1, axis=2, keepdims=True), 1e-12)
+    n2 = np.cross(t, n1)
+    angle = 2 * np.pi * np.arange(k)[None, :] / COIL_POINTS + rng.uniform(0, 2 * np.pi, (len(pts), 1))
+    r = radius * rng.uniform(0.7, 1.3, (len(pts), 1)) * np.clip(np.linspace(0, 5, k), 0, 1)[None, :]
+    return path + r[..., None] * (np.cos(angle)[..., None] * n1 + np.sin(angle)[..., None] * n2)
 
 
 def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> Strands:
@@ -405,8 +453,12 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
         n = max(40, int(n_total * area[mask].sum() / max(scalp_area, 1e-9)))
         comb = scalp.forward * 0.8 - scalp.up if (r_idx == 0 and params.style == "fringe") else None
         pts, normals = _strands(scalp, mask, n, L, look, rng, comb=comb, body=body, face_top=top)
+        if params.style in ENVELOPES:
+            pts = _inside_envelope(scalp, pts, np.array(ENVELOPES[params.style]) * params.length, rng)
         pts = _finish(scalp, pts, normals, top)
-        parts.append(Strands(pts, _taper(len(pts), 1 + 0.3 * volume), np.full(len(pts), r_idx)))
+        if params.style in COILS:
+            pts = _clear_face(scalp, _coil(pts, normals, COILS[params.style] * params.curliness, rng), top)
+        parts.append(Strands(pts, _taper(len(pts), 1 + 0.3 * volume, pts.shape[1]), np.full(len(pts), r_idx)))
     L = BEARDS[params.beard]
     mask = face_region == 5
     if L > 0 and mask.any():
@@ -429,6 +481,33 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     if body is not None and len(hair):
         hair.points = _off_body(hair.points, body)
     return hair
+
+
+# style -> how far its mass reaches past the skull (metres at length 1: sides, top, front, back): an
+# afro is a rounded volume, not strands standing out as far as they are long
+ENVELOPES = {"afro": (0.07, 0.10, 0.06, 0.06)}
+ENVELOPE_FUZZ = 0.15  # strands end up to this share of the reach short of the envelope: a soft edge
+
+
+def _inside_envelope(scalp: ScalpRegions, pts: np.ndarray, reach: np.ndarray, rng) -> np.ndarray:
+    """Strands (N, K, 3) shortened about their roots until they lie inside an ellipsoid around the
+    head: the skull's semi-axes plus ``reach`` (sides, top, front, back), each strand's own
+    envelope up to ``ENVELOPE_FUZZ`` of the reach smaller."""
+    B = frame(scalp.forward, scalp.up).T
+    local = (pts - scalp.origin) @ B.T
+    root, d = local[:, :1], local - local[:, :1]
+    fuzz = 1.0 - ENVELOPE_FUZZ * rng.random((len(pts), 1, 1))
+    forward_reach = np.where(local[..., 2:] >= 0, reach[2], reach[3])
+    axes = np.concatenate([np.broadcast_to(scalp.skull[:2] + reach[:2], local[..., :2].shape),
+                           scalp.skull[2] + forward_reach], -1) * fuzz
+    # largest c in [0, 1] with |(root + c d) / axes| <= 1, per point: a quadratic in c
+    a = ((d / axes) ** 2).sum(-1)
+    b = 2 * ((root / axes) * (d / axes)).sum(-1)
+    c0 = ((root / axes) ** 2).sum(-1) - 1.0
+    disc = np.sqrt(np.clip(b * b - 4 * a * c0, 0.0, None))
+    c = np.where(a > 1e-12, (-b + disc) / np.maximum(2 * a, 1e-12), 1.0)
+    scale = np.clip(c, 0.0, 1.0).min(1)[:, None, None]
+    return (root + scale * d) @ B + scalp.origin
 
 
 def _finish(scalp, pts, normals, face_top) -> np.ndarray:
