@@ -1,9 +1,9 @@
 """Exact optical flow between two frames of a scene.
 
 Each pixel-centre ray of frame f hits a surface point: a triangle and its barycentric
-coordinates (meshes), or a point rigid with a bone (hair). That same material point is taken
-to frame g (the triangle's vertices at g; the bone's transform at g) and projected with g's
-camera: flow = its pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at
+coordinates (meshes), or a curve segment, the share along it and the offset from its axis
+(hair). That same material point is taken to frame g (the triangle's vertices at g; the
+segment's control points at g, plus the offset) and projected with g's camera: flow = its pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at
 g, 1 hidden at g (the ray from g's eye meets another surface first), 2 outside g's image or
 behind its camera, 3 nothing hit at f (background: flow 0).
 """
@@ -23,11 +23,11 @@ SEEN, HIDDEN, OUTSIDE, BACKGROUND = 0, 1, 2, 3
 
 @dataclass
 class Geometry:
-    """A scene's moving shapes at one frame: mesh vertices by name, and for curves (hair) the
-    rigid transform ``(A, b)`` (x = A x_rest + b) of the bone they move with."""
+    """A scene's moving shapes at one frame: mesh vertices (V, 3) and curve control points
+    (N, K, 3) by name."""
 
     vertices: dict = field(default_factory=dict)
-    rigid: dict = field(default_factory=dict)
+    curves: dict = field(default_factory=dict)
 
 
 def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Geometry) -> np.ndarray:
@@ -44,11 +44,16 @@ def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Ge
             tri = V[scene.meshes[name].faces[hits["prim"][sel]].astype(np.int64)]
             u, v = hits["u"][sel, None], hits["v"][sel, None]
             out[sel] = (1 - u - v) * tri[:, 0] + u * tri[:, 1] + v * tri[:, 2]
-        else:
+        else:  # a curve: segment prim of strand prim // (K - 1), u along it; p lies a radius off its axis
             p = rays_o + hits["t"][sel, None] * rays_d[sel]
-            if name in then.rigid and name in now.rigid:
-                (A0, b0), (A1, b1) = now.rigid[name], then.rigid[name]
-                p = (p - b0) @ A0 @ A1.T + b1  # A0^T (p - b0) is the rest position; A0 is a rotation
+            if name in then.curves:
+                P0 = now.curves.get(name, scene.curves[name].points)
+                k = P0.shape[1] - 1
+                s, j, u = hits["prim"][sel] // k, hits["prim"][sel] % k, hits["u"][sel, None]
+
+                def axis(P):
+                    return (1 - u) * P[s, j] + u * P[s, j + 1]
+                p = axis(then.curves[name]) + (p - axis(P0))
             out[sel] = p
     return out
 
@@ -98,11 +103,14 @@ def geometry_copy(scene: Scene) -> Scene:
 def _apply(scene: Scene, geometry: Geometry) -> None:
     for name, v in geometry.vertices.items():
         scene.update_mesh(name, v)
+    for name, p in geometry.curves.items():
+        if name in scene.curves:
+            scene.update_curves(name, p)
 
 
 def subjects_geometry(subjects: list, frame: int) -> Geometry:
     """The moving shapes of placed subjects (``compose.subjects.PlacedSubject``) at ``frame``:
-    every mesh layer's vertices and the head bone's transform for hair and beard."""
+    every mesh layer's vertices and every curve layer's (hair, beard) control points."""
     g = Geometry()
     for p in subjects:
         if not 0 <= int(frame) < p.motion.n_frames:
@@ -110,29 +118,24 @@ def subjects_geometry(subjects: list, frame: int) -> Geometry:
                               "before the first frame or past the last")
         rot, root = p.motion.frame(int(frame))
         for layer in p.human.pose(rot, root):
-            if not layer.is_curves:
+            if layer.is_curves:
+                g.curves[f"{p.prefix}_{layer.name}"] = layer.points
+            else:
                 g.vertices[f"{p.prefix}_{layer.name}"] = layer.vertices
-        A, b = p.human._transforms(rot, root)
-        for name in ("hair", "beard"):
-            g.rigid[f"{p.prefix}_{name}"] = (A[p.human.head_bone], b[p.human.head_bone])
     return g
 
 
 def _hidden(scene: Scene, eye, points, now: Geometry, then: Geometry) -> np.ndarray:
     """Whether each point, at the other frame, is behind another surface seen from ``eye``."""
-    rigid_names = [n for n in then.rigid if n in scene.curves]
-    saved = {n: (scene.curves[n].points, scene.curves[n].previous_points) for n in rigid_names}
+    saved = {n: (scene.curves[n].points, scene.curves[n].previous_points) for n in then.curves if n in scene.curves}
     previous = {n: scene.meshes[n].previous_vertices for n in then.vertices}
     _apply(scene, then)
-    for n in rigid_names:
-        (A0, b0), (A1, b1) = now.rigid[n], then.rigid[n]
-        scene.update_curves(n, (saved[n][0] - b0) @ A0 @ A1.T + b1)
     try:
         return _blocked(scene, eye, points)
     finally:  # back to this frame, with the scene's own previous positions kept
         _apply(scene, now)
-        for n in rigid_names:
-            scene.update_curves(n, saved[n][0])
-            scene.curves[n].previous_points = saved[n][1]
+        for n, (points_now, prev) in saved.items():
+            scene.update_curves(n, points_now)
+            scene.curves[n].previous_points = prev
         for n, prev in previous.items():
             scene.meshes[n].previous_vertices = prev

@@ -7,8 +7,9 @@ A few hundred guide strands are grown in small steps that slide over the rest bo
 the face; thousands of thin, tapered children take the shape of their nearest guides (never
 across the part), gathered towards one guide's tip in locks. Control points lie close together
 at the root, where a strand bends round the head. An afro is shortened into a rounded envelope
-(``ENVELOPES``); afro and curly strands wind in coils (``COILS``). Strands are rigid with the head
-bone; the scalp under them is tinted with the hair's colour (``hair_colour``, ``root_cover``).
+(``ENVELOPES``); afro and curly strands wind in coils (``COILS``). Strands move with the head
+bone down to the neck and with the body under them below it (``follow_weights``); the scalp
+under them is tinted with the hair's colour (``hair_colour``, ``root_cover``).
 """
 from __future__ import annotations
 
@@ -518,6 +519,36 @@ def _finish(scalp, pts, normals, face_top) -> np.ndarray:
     if face_top is not None:
         pts = _clear_face(scalp, pts, face_top)
     return pts
+
+
+FOLLOW = (0.0, 0.06)  # metres under the head joint where strands start and finish following the body
+
+
+def follow_weights(strands: Strands, head_joint: np.ndarray, head_bone: int, near_weights):
+    """Skinning weights (N * K, J), sparse, for the strands' control points: rigid with the
+    ``head_bone`` down to ``FOLLOW[0]`` under the ``head_joint``, then blended into the weights
+    of the nearest body vertex (``near_weights(points)``: sparse (P, J)), fully from ``FOLLOW[1]``
+    under it. Long hair rests on the shoulders and back and moves with them when the head turns
+    or bends, instead of swinging into them; beards stay with the head."""
+    from scipy import sparse
+    pts = strands.points.reshape(-1, 3)
+    drop = np.clip((head_joint[1] - FOLLOW[0] - pts[:, 1]) / (FOLLOW[1] - FOLLOW[0]), 0.0, 1.0)
+    b = drop * drop * (3 - 2 * drop) * np.repeat(strands.region < 5, strands.points.shape[1])
+    J = near_weights(pts[:1]).shape[1]
+    rows = np.arange(len(pts))
+    rigid = sparse.csr_matrix((1.0 - b, (rows, np.full(len(pts), head_bone))), shape=(len(pts), J))
+    follow = np.flatnonzero(b > 0)
+    if not len(follow):
+        return rigid
+    blended = sparse.diags(b[follow]) @ near_weights(pts[follow])
+    return (rigid + _rows(blended, follow, len(pts))).tocsr()
+
+
+def _rows(m, rows: np.ndarray, n: int):
+    """Sparse (n, J) holding ``m``'s rows at ``rows``, zeros elsewhere."""
+    from scipy import sparse
+    m = m.tocoo()
+    return sparse.csr_matrix((m.data, (rows[m.row], m.col)), shape=(n, m.shape[1]))
 
 
 def hair_colour(params: HairParams) -> np.ndarray:

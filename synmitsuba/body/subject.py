@@ -14,7 +14,7 @@ from synmitsuba.body.binding import bind
 from synmitsuba.body.collide import GarmentCollider, Surface, incidence
 from synmitsuba.body.garments import (GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights, build_garment,
                                       garment_offset, metres_per_uv)
-from synmitsuba.body.hair import (Strands, grow_hair, hair_colour, hair_material, root_cover,
+from synmitsuba.body.hair import (Strands, follow_weights, grow_hair, hair_colour, hair_material, root_cover,
                                   scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
@@ -125,6 +125,7 @@ class LayeredHuman:
         self._build_head_and_hair()
         self._build_accessories()
         self.hair_shade = strand_melanin(self.recipe.hair, len(self.hair))  # per strand, once: pose() reuses it
+        self.hair_weights = self._hair_weights()
         self._tint_scalp()
         self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
 
@@ -170,6 +171,18 @@ class LayeredHuman:
                 gap, _ = cKDTree(v).query(self.hair.points[:, 0])
                 self.hair = self.hair.subset((self.hair.region < 5) | (gap > 0.015))
 
+    def _hair_weights(self):
+        """The strands' skinning weights (``hair.follow_weights``): nearest body vertex's below the neck."""
+        body_weights = self.parts[0].skinning_weights  # on the body split at seams: rows via split.source
+        tree = self.body.surface().tree
+        row = np.zeros(len(self.body.vertices), np.int64)
+        row[self.split.source] = np.arange(len(self.split.source))
+
+        def near_weights(points):
+            return body_weights[row[tree.query(points)[1]]]
+        sk = self.skeleton
+        return follow_weights(self.hair, sk.rest_positions[self.head_bone], self.head_bone, near_weights)
+
     def _tint_scalp(self) -> None:
         """The skin under the hair takes the hair's colour, ``SCALP_TINT`` of the way (``BEARD_TINT``
         under a beard): real hair is dense enough that no skin shows between strands; ours is not."""
@@ -210,8 +223,8 @@ class LayeredHuman:
         if resolve:
             self._resolve(out)
         if len(self.hair):
-            A, b = T[0][self.head_bone], T[1][self.head_bone]
-            hair = self.hair.transformed(A, b)
+            hair = dataclasses.replace(self.hair, points=skin(self.hair.points.reshape(-1, 3), self.hair_weights, T
+                                                              ).reshape(self.hair.points.shape))
             scalp = hair.region < 5
             shade = self.hair_shade
             if scalp.any():
