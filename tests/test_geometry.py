@@ -88,9 +88,11 @@ def test_weld_joins_points_within_a_micrometre_whatever_the_grid():
 def test_winding_numbers_and_signed_distance_agree_with_a_torus():
     """Winding numbers against the analytic torus (points off the polygonised surface); the
     pseudonormal sign of ``signed_distance`` against the winding numbers on coarse tori, where
-    saddle vertices and edges make one face's normal point the wrong way."""
+    saddle vertices and edges make one face's normal point the wrong way; the pseudonormals
+    computed from the faces around each feature alone (``local_pseudonormals``, for posed
+    meshes) equal the whole mesh's."""
     import trimesh
-    from synmitsuba.body.binding import closest_points, signed_distance
+    from synmitsuba.body.binding import MeshIndex, closest_points, incident_faces, local_pseudonormals, signed_distance
     from synmitsuba.geometry import face_normals
     rng = np.random.default_rng(0)
     p = rng.uniform([-1.5, -1.5, -0.5], [1.5, 1.5, 0.5], (3000, 3))
@@ -107,3 +109,10 @@ def test_winding_numbers_and_signed_distance_agree_with_a_torus():
         c, tri, _ = closest_points(m.vertices, m.faces, p, k=8)  # one face's side: wrong at saddles
         assert ((np.einsum("ij,ij->i", p - c, face_normals(m.vertices[m.faces[tri]])) < 0) != inside).sum() >= 5
         np.testing.assert_allclose(np.abs(d), np.linalg.norm(p - c, axis=1))
+        c, tri, bary = closest_points(m.vertices, m.faces, p, k=8)  # the same, from the faces around each feature
+        local = local_pseudonormals(np.asarray(m.vertices), np.asarray(m.faces),
+                                    incident_faces(np.asarray(m.faces), len(m.vertices)), tri, bary)
+        assert np.array_equal(np.einsum("ij,ij->i", p - c, local) < 0, inside)
+        whole = MeshIndex(m.vertices, m.faces).pseudonormals(tri, bary)
+        np.testing.assert_allclose(local / np.linalg.norm(local, axis=1, keepdims=True),
+                                   whole / np.linalg.norm(whole, axis=1, keepdims=True), atol=1e-9)

@@ -138,6 +138,43 @@ class MeshIndex:
         return np.where(((points - closest) * n).sum(1) < 0, -d, d)
 
 
+def local_pseudonormals(vertices, faces, around, face, barycentric, tol: float = 1e-6) -> np.ndarray:
+    """``MeshIndex.pseudonormals`` (unnormalised) computed for the given features alone, from the
+    faces ``around`` (``incident_faces``) each: for a posed mesh, where building every edge's
+    and vertex's normal each frame would cost more than the few queries need."""
+    tri = vertices[faces[face]]
+    out = _unit(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+    zero = np.asarray(barycentric) < tol
+    edge = np.flatnonzero(zero.sum(1) == 1)
+    if len(edge):  # the face across the edge opposite the zero corner
+        c = zero[edge].argmax(1)
+        a, b = faces[face[edge], (c + 1) % 3], faces[face[edge], (c + 2) % 3]
+        cand = around[a]
+        hit = (cand >= 0) & (cand != face[edge, None]) & (faces[np.maximum(cand, 0)] == b[:, None, None]).any(-1)
+        other = cand[np.arange(len(edge)), hit.argmax(1)]
+        t = vertices[faces[other]]
+        out[edge] += np.where(hit.any(1)[:, None], _unit(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])), 0.0)
+    corner = np.flatnonzero(zero.sum(1) >= 2)
+    if len(corner):  # the angle-weighted normal of the faces around the vertex
+        v = faces[face[corner], np.asarray(barycentric)[corner].argmax(1)]
+        cand = around[v]
+        f = faces[np.maximum(cand, 0)]                                   # (n, m, 3)
+        t = vertices[f]
+        k = (f == v[:, None, None]).argmax(-1)                           # v's corner in each face
+        pick = np.take_along_axis
+        p0 = pick(t, k[..., None, None].repeat(3, -1), 2)[:, :, 0]
+        p1 = pick(t, ((k + 1) % 3)[..., None, None].repeat(3, -1), 2)[:, :, 0]
+        p2 = pick(t, ((k + 2) % 3)[..., None, None].repeat(3, -1), 2)[:, :, 0]
+        e1, e2 = _unit(p1 - p0), _unit(p2 - p0)
+        angle = np.arccos(np.clip((e1 * e2).sum(-1), -1, 1)) * (cand >= 0)
+        out[corner] = (angle[..., None] * _unit(np.cross(t[:, :, 1] - t[:, :, 0], t[:, :, 2] - t[:, :, 0]))).sum(1)
+    return out
+
+
+def _unit(x: np.ndarray) -> np.ndarray:
+    return x / np.maximum(np.linalg.norm(x, axis=-1, keepdims=True), 1e-30)
+
+
 def feature_normals(vertices, faces, face, barycentric, tol: float = 1e-6) -> np.ndarray:
     """``MeshIndex.pseudonormals`` of a mesh queried once."""
     return MeshIndex(vertices, faces).pseudonormals(face, barycentric, tol)

@@ -9,11 +9,15 @@ Three passes, each a push along a normal:
 2. the posed body near the vertex, for another part pressing in (an arm against the torso, one
    thigh against the other): the lowest height over the tangent planes of its 4 nearest body
    vertices, and, where that is within ``EXACT_BAND`` of the margin, the exact closest point on
-   the triangles around them. One nearest vertex is not enough: in a crease (armpit, hip) its
-   tangent plane is tilted, and said "2 cm outside" of vertices 2 cm inside the torso;
+   the triangles around them, its side from the closest feature's pseudonormal. One nearest
+   vertex is not enough: in a crease (armpit, hip) its tangent plane is tilted, and said "2 cm
+   outside" of vertices 2 cm inside the torso;
 3. the nearest vertex of each inner garment within ``REACH``, by ``LAYER_MARGIN``.
-Heights over tangent planes (area-weighted vertex normals) are exact on flat patches and cheap
-for every vertex; the exact test costs ~10 us a vertex, so it goes only where it can matter.
+Then the vertices a neighbour's push carried more than ``CARRIED`` past their own, or an inner
+garment moved, get pass 2 again without spreading: along their own normal they can go into the
+next body part (a dress between belly and thigh in a squat, a jacket out of a sleeve into the
+chest). Heights over tangent planes (area-weighted vertex normals) are exact on flat patches
+and cheap for every vertex; the exact test costs ~10 us a vertex, so it goes only where it can matter.
 """
 from __future__ import annotations
 
@@ -25,6 +29,8 @@ SMOOTHING = 2         # rounds of spreading each push to the neighbouring vertic
 REACH = 0.03          # metres: an inner garment farther than this from a vertex is not its collider
 LAYER_MARGIN = 0.002  # metres kept between a garment and the garment under it
 EXACT_BAND = 0.004    # metres over the margin under which a vertex gets the exact closest-point test
+CARRIED = 0.002       # metres a neighbour's push may carry a vertex past its own before it is checked again:
+                      # at most that deep into the next body part
 
 
 def incidence(faces: np.ndarray, n_vertices: int):
@@ -86,14 +92,16 @@ class Surface:
 
     def _exact(self, points: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Signed distance to the closest point on the faces around ``near`` vertices and the
-        outward direction there (the side from the vertex normals interpolated at it)."""
-        from synmitsuba.body.binding import closest_on_faces
+        outward direction there (the side from the closest feature's pseudonormal: interpolated
+        vertex normals read a point inside an arm as outside the chest beside it)."""
+        from synmitsuba.body.binding import closest_on_faces, local_pseudonormals
         c, face, bary = closest_on_faces(self.vertices, self.faces, points,
                                          self.around[near].reshape(len(points), -1))
-        n = np.einsum("nk,nka->na", bary, self.normals[self.faces[face]])
+        n = local_pseudonormals(self.vertices, self.faces, self.around, face, bary)
         d = points - c
         dist = np.linalg.norm(d, axis=1)
         side = np.where(np.einsum("ij,ij->i", d, n) < 0, -1.0, 1.0)
+        n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
         out = np.where(dist[:, None] > 1e-9, d * (side / np.maximum(dist, 1e-9))[:, None], n)
         return side * dist, out
 
@@ -131,13 +139,28 @@ class GarmentCollider:
         checks += [(lambda p, s=s: s.depth(p, REACH), LAYER_MARGIN) for s in inner]
         if calibrate:
             self.floors = []
+        carried = np.zeros(len(out), bool)  # moved by something other than their own body clearance
         for k, (check, margin) in enumerate(checks):
             height, normals = check(out)
             if calibrate:
                 self.floors.append(np.minimum(margin, height))
-            else:
-                self._push(out, height, normals, self.floors[k])
+                continue
+            own, moved = self._push(out, height, normals, self.floors[k])
+            if k == 1:
+                carried |= moved > own + CARRIED  # farther than it asked
+            elif k > 1:
+                carried |= moved > 0
+        if carried.any():
+            self._back_out(out, np.flatnonzero(carried), body)
         return out
+
+    def _back_out(self, points: np.ndarray, carried: np.ndarray, body: Surface) -> None:
+        """The body's clearance again, without smoothing, for vertices ``carried`` by their
+        neighbours' push or out of an inner layer: along their own normal can be into the next
+        body part (a dress between belly and thigh in a squat; out of a sleeve, into the chest)."""
+        height, normals = body.clearance(points[carried], self.margin + EXACT_BAND)
+        push = np.clip(self.floors[1][carried] - height, 0.0, None)
+        points[carried] += push[:, None] * normals
 
     def _over_bound_point(self, points: np.ndarray, body: Surface) -> tuple[np.ndarray, np.ndarray]:
         """Heights over each vertex's own bound body point (posed) and the normal there."""
@@ -146,12 +169,16 @@ class GarmentCollider:
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
         return np.einsum("ij,ij->i", points - at, n), n
 
-    def _push(self, points: np.ndarray, height: np.ndarray, normals: np.ndarray, floor: np.ndarray) -> None:
+    def _push(self, points: np.ndarray, height: np.ndarray, normals: np.ndarray, floor: np.ndarray):
         """Move points below ``floor`` (heights over their surface) up to it along ``normals``;
-        a height of +inf marks a point with no surface to answer to."""
-        push = np.clip(floor - height, 0.0, None)  # +inf height: no push
-        if not push.any():
-            return
+        a height of +inf marks a point with no surface to answer to. Returns (N,) the push each
+        point asked for and how far it moved."""
+        own = np.clip(floor - height, 0.0, None)  # +inf height: no push
+        if not own.any():
+            return own, own
+        push = own
         for _ in range(SMOOTHING):  # neighbours follow part of the way: no crease at the edge
             push = np.maximum(push, self.spread @ push)
-        points += (push * np.isfinite(height))[:, None] * normals
+        push = push * np.isfinite(height)
+        points += push[:, None] * normals
+        return own, push
