@@ -108,7 +108,9 @@ class Surface:
     def depth(self, points: np.ndarray, reach: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
         """(signed height over the nearest vertex's tangent plane (N,), that normal (N, 3));
         points farther than ``reach`` from every vertex get +inf."""
-        dist, near = self.tree.query(points, distance_upper_bound=reach)
+        dist, near = self.tree.query(points, k=2, distance_upper_bound=reach)
+        tie = (dist[:, 1] - dist[:, 0] < 1e-7) & (near[:, 1] < near[:, 0])  # equally near: the lower index,
+        dist, near = dist[:, 0], np.where(tie, near[:, 1], near[:, 0])      # so a rigid move keeps the choice
         found = np.isfinite(dist)
         near = np.where(found, near, 0)
         n = self.normals[near]
