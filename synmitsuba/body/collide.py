@@ -43,10 +43,16 @@ def incidence(faces: np.ndarray, n_vertices: int):
 
 
 def _normals(vertices: np.ndarray, faces: np.ndarray, vf) -> np.ndarray:
-    """Area-weighted vertex normals (``vf``: the faces' ``incidence``)."""
-    tri = vertices[faces]
-    n = vf @ np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    """Area-weighted vertex normals (``vf``: the faces' ``incidence``); the cross product by
+    components (np.cross on a (F, 3, 3) gather took half again as long)."""
+    a = vertices[faces[:, 0]]
+    e1, e2 = vertices[faces[:, 1]] - a, vertices[faces[:, 2]] - a
+    cross = np.empty_like(e1)
+    cross[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
+    cross[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
+    cross[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    n = vf @ cross
+    return n / np.maximum(np.sqrt(np.einsum("ij,ij->i", n, n)), 1e-12)[:, None]
 
 
 def neighbour_mean(faces: np.ndarray, n: int):
@@ -73,14 +79,16 @@ class Surface:
     def of(cls, vertices: np.ndarray, faces: np.ndarray, vf, around=None) -> "Surface":
         """The surface of a posed mesh; ``vf`` its faces' ``incidence`` and ``around`` their
         ``incident_faces`` (both fixed per mesh)."""
-        from scipy.spatial import cKDTree
-        return cls(vertices, _normals(vertices, faces, vf), cKDTree(vertices), np.asarray(faces), around)
+        from pykdtree.kdtree import KDTree  # built and queried 2.5-3x faster than scipy's cKDTree, the same
+        vertices = np.ascontiguousarray(vertices, dtype=np.float64)  # answers (queries in OpenMP threads)
+        return cls(vertices, _normals(vertices, faces, vf), KDTree(vertices), np.asarray(faces), around)
 
     def clearance(self, points: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
         """(height (N,), outward normal (N, 3)): the lowest over the tangent planes of the 4
         nearest vertices, made exact (closest point on the triangles around the 2 nearest)
         where it is under ``band``."""
-        _, near = self.tree.query(points, k=4)
+        _, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=4)
+        near = near.astype(np.int64)
         h = np.einsum("nka,nka->nk", points[:, None] - self.vertices[near], self.normals[near])
         low = h.argmin(1)
         rows = np.arange(len(points))
@@ -108,8 +116,9 @@ class Surface:
     def depth(self, points: np.ndarray, reach: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
         """(signed height over the nearest vertex's tangent plane (N,), that normal (N, 3));
         points farther than ``reach`` from every vertex get +inf."""
-        dist, near = self.tree.query(points, k=2, distance_upper_bound=reach)
-        tie = (dist[:, 1] - dist[:, 0] < 1e-7) & (near[:, 1] < near[:, 0])  # equally near: the lower index,
+        dist, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=2, distance_upper_bound=reach)
+        near = near.astype(np.int64)
+        tie = (dist[:, 1] <= dist[:, 0] + 1e-7) & (near[:, 1] < near[:, 0])  # equally near: the lower index,
         dist, near = dist[:, 0], np.where(tie, near[:, 1], near[:, 0])      # so a rigid move keeps the choice
         found = np.isfinite(dist)
         near = np.where(found, near, 0)
