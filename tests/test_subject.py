@@ -3,6 +3,7 @@ import json
 
 import numpy as np
 import pytest
+import trimesh
 
 import synmitsuba as sm
 from synmitsuba.body.binding import bound_points, signed_distance
@@ -706,22 +707,43 @@ def test_cap_crown_ends_on_its_edge_line_and_the_bill_is_a_peak():
     assert v[sides, 1].mean() < v[mid, 1].mean()
 
 
+def _pieces(v: np.ndarray, f: np.ndarray) -> list:
+    """Vertex indices of each connected piece of a mesh, largest first."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    label = connected_components(coo_matrix((np.ones(len(e)), tuple(e.T)), shape=(len(v),) * 2))[1]
+    return sorted((np.flatnonzero(label == k) for k in np.unique(label)), key=len, reverse=True)
+
+
 @pytest.mark.parametrize("seed", [0, 3])
 def test_mask_covers_nose_and_mouth_and_headphones_sit_on_the_ears(seed):
-    """Against anny's keypoints: the mask spans the nose keypoint's height, stays below the
-    eyes and reaches well below the nose (the mouth), off the skin; the headphones' cups are on
-    the ears and the band passes over the crown, not in front of the face."""
+    """Against anny's keypoints: the mask's shell spans the nose keypoint's height, stays below
+    the eyes and reaches well below the nose (the mouth), off the skin; its two ear loops pass
+    over and behind the ears and meet the shell; the headphones' cups are on the ears and the
+    band passes over the crown, not in front of the face."""
     recipe = sm.sample_subject(np.random.default_rng(seed), {"accessories": ["mask", "headphones"],
                                                              "hair_style": "bald", "texture_size": 64})
     h = sm.build_subject(recipe)
     kp = h.keypoints()
     nose, eye_y, ears = kp[0], kp[[1, 2], 1].mean(), kp[[3, 4]]
-    mask, phones = (next(p.rest for p in h.parts if p.name == k) for k in ("mask", "headphones"))
+    part, phones = (next(p for p in h.parts if p.name == k) for k in ("mask", "headphones"))
+    phones = phones.rest
+    pieces = _pieces(part.rest, part.faces)
+    assert len(pieces) == 3  # the shell and two loops
+    mask, loops = part.rest[pieces[0]], [part.rest[k] for k in pieces[1:]]
     drop = eye_y - nose[1]
     assert mask[:, 1].max() < eye_y - 0.3 * drop and mask[:, 1].min() < nose[1] - 1.5 * drop
     assert mask[:, 2].max() > nose[2]  # in front of the nose tip
     d = signed_distance(h.body.vertices, h.body.faces, mask)
-    assert (d > 0.002).mean() > 0.99 and np.median(d) > 0.004  # (the sign is ambiguous in the lips' crease)
+    assert d.min() > 0.002 and np.median(d) > 0.004
+    for ear in ears:
+        loop = next(q for q in loops if np.sign(q[:, 0].mean()) == np.sign(ear[0]))
+        assert signed_distance(h.body.vertices, h.body.faces, loop).min() > 0.001
+        behind = loop[(np.abs(loop[:, 1] - ear[1]) < 0.015)]
+        assert behind[:, 2].min() < ear[2] - 0.02  # round the back of the ear
+        assert loop[np.abs(loop[:, 2] - ear[2]) < 0.02, 1].max() > ear[1] + 0.02  # over it
+        assert np.linalg.norm(mask[:, None] - loop[[0, -1]][None], axis=2).min(0).max() < 0.005  # both ends meet the shell
     for ear in ears:
         side = phones[np.sign(phones[:, 0]) == np.sign(ear[0])]
         cup = side[np.abs(side[:, 1] - ear[1]) < 0.03]
@@ -730,6 +752,40 @@ def test_mask_covers_nose_and_mouth_and_headphones_sit_on_the_ears(seed):
     above = phones[phones[:, 1] > top]
     assert len(above) and np.abs(above[:, 2] - h.head["centre"][2]).max() < 0.03  # over the crown
     assert phones[:, 2].max() < nose[2] - 0.02  # nothing in front of the face
+
+
+def test_mask_is_taut_and_pleated():
+    """Down the middle of the face, from the nose tip to the chin, the mask's front never dips
+    under the straight line between them (cloth stretched over the nose and chin spans the
+    hollow under the nose and the mouth instead of following them; the face itself dips there
+    by millimetres), and it stands at least 8 mm off the face in that hollow; its profile's
+    strongest ripple repeats every pleat (an FFT of the profile less a quadratic fit)."""
+    from synmitsuba.body.accessories import MASK_PLEATS
+    h = sm.build_subject(sm.sample_subject(np.random.default_rng(3), {"accessories": ["mask"], "hair_style": "bald",
+                                                                       "texture_size": 64}))
+    part = next(p for p in h.parts if p.name == "mask")
+    nose = h.keypoints()[0]
+
+    def profile(v, f, ys):  # the frontmost point of the mesh's cut by the midplane, at each height
+        seg = trimesh.intersections.mesh_plane(trimesh.Trimesh(v, f, process=False), [1, 0, 0], nose)
+        t = np.linspace(0, 1, 20)[None, :, None]
+        p = (seg[:, :1] * (1 - t) + seg[:, 1:] * t).reshape(-1, 3)
+        p = p[p[:, 2] > nose[2] - 0.08]  # the face, not the back of the head
+        return np.array([p[np.abs(p[:, 1] - y) < 0.001, 2].max() for y in ys])
+    body = h.body
+    ys = np.arange(nose[1] - 0.004, nose[1] - 0.05, -0.002)
+    front, face = profile(part.rest, part.faces, ys), profile(body.vertices, body.faces, ys)
+    chord = front[0] + (front[-1] - front[0]) * (ys - ys[0]) / (ys[-1] - ys[0])
+    assert (front - chord).min() > -0.0015
+    face_chord = face[0] + (face[-1] - face[0]) * (ys - ys[0]) / (ys[-1] - ys[0])
+    assert (face - face_chord).min() < -0.004 and (front - face).max() > 0.008
+    period, _ = MASK_PLEATS
+    ys = np.arange(nose[1] - 0.005, nose[1] - 0.05, -0.0005)
+    z = profile(part.rest, part.faces, ys)
+    z = z - np.polyval(np.polyfit(ys, z, 2), ys)
+    freq = np.fft.rfftfreq(4096, 0.0005)  # zero-padded: bins of 0.5 cycles a metre
+    peak = freq[1 + np.abs(np.fft.rfft(z * np.hanning(len(z)), 4096))[1:].argmax()]
+    assert abs(peak * period - 1) < 0.1
 
 
 def test_keypoints_are_anatomical(human):

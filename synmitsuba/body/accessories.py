@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.body.garments import hem, open_edges, push_out
 from synmitsuba.body.textures import LAB, sample_lab_colour
 from synmitsuba.body.topology import cut, submesh
 from synmitsuba.errors import ConfigError
@@ -179,19 +180,169 @@ def _watch(p: AccessoryParams, body, head):
     return np.asarray(band.vertices) @ align_vectors([0, 0, 1], axis).T + wrist - 0.035 * axis, np.asarray(band.faces)
 
 
+MASK_SIDE = 0.18  # the mask's sides: a plane this share of the head's depth in front of its centre
+MASK_PLEATS = (0.013, 0.0012)  # a surgical mask's pleats: period (m, down the face) and depth (m)
+
+
 def _mask(p: AccessoryParams, body, head):
-    """Nose and mouth down to the chin: the front of the face from a third of the way up from
-    anny's nose keypoint to its eyes, down to the chin (1.9 times that eye-to-nose drop below the
-    nose), cut along smooth curves, 6 mm off the skin."""
-    rel = body.vertices - head["centre"]
-    fwd, up, rad = head["forward"], head["up"], head["radii"]
-    nose, drop = (head["nose"] - head["centre"]) @ up, (head["eyes"].mean(0) - head["nose"]) @ up
-    h = rel @ up
-    phi = np.minimum.reduce([nose + 0.35 * drop - h, h - (nose - 1.9 * drop), rel @ fwd - 0.3 * rad[2]])
-    from synmitsuba.body.garments import push_out
-    f, v, n = cut(body.faces, phi, body.vertices, vertex_normals(body.vertices, body.faces))
-    # the lips' crease and the mouth's inside are concave: what lands in the head comes out
-    return push_out(body, v + n / np.linalg.norm(n, axis=1, keepdims=True) * 0.006, clearance=0.003), f
+    """A face mask from the nose bridge to under the chin, stretched taut over nose, cheeks and
+    chin (it bridges the lips and the hollows beside the nose instead of following them), pleated,
+    with a hemmed edge of the cloth's thickness and an elastic loop round each ear."""
+    R, c = _local(head)
+    v = (body.vertices - c) @ R
+    shell, f = _mask_shell(body, head, v)
+    shell, f = _pleat(shell, f)
+    shell, f, _ = hem(body, shell @ R.T + c, f, np.zeros((len(shell), 2)), 0.0015)
+    loops = [_tube(_ear_loop(body, head, (shell - c) @ R, x), 0.0012) for x in (-1, 1)]
+    parts = [(shell, f)] + [(q @ R.T + c, g) for q, g in loops]
+    return np.concatenate([q for q, _ in parts]), np.concatenate(
+        [g + sum(len(q) for q, _ in parts[:k]) for k, (_, g) in enumerate(parts)])
+
+
+def _mask_outline(head, v: np.ndarray) -> np.ndarray:
+    """> 0 inside the mask, for head-frame points ``v`` (columns side, up, forward): under a top
+    edge that rises over the nose bridge (half-way from anny's nose keypoint to its eyes) from
+    0.15 of that drop at the cheeks, above a line 1.9 drops under the nose (under the chin), in
+    front of a plane at 0.18 of the head's depth before its centre (2-3 cm short of the ears)."""
+    R, c = _local(head)
+    nose, eyes = (head["nose"] - c) @ R, ((head["eyes"] - c) @ R).mean(0)
+    drop, x = eyes[1] - nose[1], v[:, 0] - nose[0]
+    top = nose[1] + drop * (0.15 + 0.35 * np.exp(-(x / 0.015) ** 2))
+    return np.minimum.reduce([top - v[:, 1], v[:, 1] - (nose[1] - 1.9 * drop), v[:, 2] - MASK_SIDE * head["radii"][2]])
+
+
+def mask_covers(head, points: np.ndarray) -> np.ndarray:
+    """Which points (beard roots) lie under the mask's outline or within 1 cm of it."""
+    R, c = _local(head)
+    return _mask_outline(head, (np.asarray(points) - c) @ R) > -0.01
+
+
+MASK_GRID = 0.003  # the shell's grid step (m) along the face (at 10 cm from the head's axis) and down it (then 1/3)
+
+
+def _mask_shell(body, head, v: np.ndarray, off: float = 0.005, rounds: int = 4):
+    """The mask as cloth spans a face, in the head frame: on a grid over (angle round the head's
+    vertical axis, height), the body's outermost distance from that axis (so the mouth's inside
+    and the nostrils do not count), ``off`` further out, raised down every column and along every
+    row to its upper concave envelope (straight lines over the hollows beside and under the nose,
+    over the lips and from the chin to the neck), averaged ``rounds`` times over a 3 x 3 window
+    (the tent over the nose gets a rounded ridge), cut along ``_mask_outline`` and pushed out to
+    3 mm off the skin where that leaves it closer. (vertices, faces)."""
+    R, c = _local(head)
+    arc, r = np.arctan2(v[:, 0], v[:, 2]) * 0.1, np.hypot(v[:, 0], v[:, 2])  # arc: along the face at 10 cm
+    span = _mask_outline(head, v) > -0.012
+    lo, hi = np.array([arc[span].min(), v[span, 1].min()]), np.array([arc[span].max(), v[span, 1].max()])
+    ga, gh = (np.arange(lo[k], hi[k] + MASK_GRID, MASK_GRID) for k in range(2))
+    near = span | ((v[:, 1] > lo[1] - 0.01) & (v[:, 1] < hi[1] + 0.01) & (v[:, 2] > 0))
+    i, j = np.round((arc[near] - lo[0]) / MASK_GRID).astype(int), np.round((v[near, 1] - lo[1]) / MASK_GRID).astype(int)
+    grid = np.full((len(ga) + 2, len(gh) + 2), -np.inf)
+    for di in (0, 1, 2):  # each vertex counts in its cell and the 8 round it
+        for dj in (0, 1, 2):
+            np.maximum.at(grid, (np.clip(i + di, 0, len(ga) + 1), np.clip(j + dj, 0, len(gh) + 1)), r[near])
+    grid = _fill(grid[1:-1, 1:-1]) + off
+    grid = np.maximum(grid, np.apply_along_axis(lambda col: _concave(gh, col), 1, grid))  # down each column
+    grid = np.maximum(grid, np.apply_along_axis(lambda row: _concave(ga, row), 0, grid))  # along each row
+    for _ in range(rounds):
+        grid = np.pad(grid, 1, mode="edge")
+        grid = sum(grid[a:a + grid.shape[0] - 2, b:b + grid.shape[1] - 2] for a in range(3) for b in range(3)) / 9
+    fine = np.arange(gh[0], gh[-1], MASK_GRID / 3)  # 1 mm rows: the pleats run across them
+    grid = np.stack([np.interp(fine, gh, row) for row in grid])
+    gh = fine
+    A, H = np.meshgrid(ga, gh, indexing="ij")
+    s = np.stack([grid * np.sin(A / 0.1), H, grid * np.cos(A / 0.1)], -1).reshape(-1, 3)
+    q = np.arange(len(ga) * len(gh)).reshape(len(ga), len(gh))
+    a, b, d, e = q[:-1, :-1].ravel(), q[1:, :-1].ravel(), q[:-1, 1:].ravel(), q[1:, 1:].ravel()
+    f, s = cut(np.concatenate([np.stack([a, d, b], 1), np.stack([b, d, e], 1)]), _mask_outline(head, s), s)
+    return (push_out(body, s @ R.T + c, clearance=0.003) - c) @ R, f
+
+
+def _fill(grid: np.ndarray) -> np.ndarray:
+    """Empty cells (-inf) of a grid take the mean of their filled neighbours, repeatedly."""
+    grid = grid.copy()
+    while np.isinf(grid).any() and not np.isinf(grid).all():
+        pad = np.pad(grid, 1, constant_values=-np.inf)
+        around = np.stack([pad[a:a + grid.shape[0], b:b + grid.shape[1]] for a in range(3) for b in range(3)])
+        ok = np.isfinite(around)
+        mean = np.where(ok, around, 0).sum(0) / np.maximum(ok.sum(0), 1)
+        grid = np.where(np.isinf(grid) & ok.any(0), mean, grid)
+    return grid
+
+
+def _concave(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The upper concave envelope of y(x) (x ascending) at x: the line cloth stretched over it takes."""
+    hull = []  # upper hull by the monotone chain
+    for j in range(len(x)):
+        while len(hull) >= 2 and ((x[hull[-1]] - x[hull[-2]]) * (y[j] - y[hull[-2]])
+                                  - (y[hull[-1]] - y[hull[-2]]) * (x[j] - x[hull[-2]])) >= 0:
+            hull.pop()
+        hull.append(j)
+    return np.interp(x, x[hull], y[hull])
+
+
+def _pleat(s: np.ndarray, f: np.ndarray):
+    """Pleated: each ``MASK_PLEATS`` band down the face stands out along the normal towards its
+    lower edge and falls back over the last quarter (a fold that overlaps the band under it),
+    fading out within 1.5 cm of the edge."""
+    from scipy.spatial import cKDTree
+    edge = np.unique(open_edges(f))
+    period, depth = MASK_PLEATS
+    u = ((s[:, 1].max() - s[:, 1]) / period) % 1.0
+    profile = np.where(u < 0.75, u / 0.75, (1.0 - u) / 0.25)
+    fade = np.clip(cKDTree(s[edge]).query(s)[0] / 0.015, 0.0, 1.0) ** 2
+    return s + vertex_normals(s, f) * (depth * profile * fade)[:, None], f
+
+
+def _ear_loop(body, head, shell: np.ndarray, x: int, points: int = 36) -> np.ndarray:
+    """One elastic loop (head frame) from the mask's top side corner over the ear, round behind it
+    and under the lobe back to the bottom corner: an ellipse round the pinna (anny's ear keypoint
+    sits at its front) joined to the corners, laid 2.5 mm off the head's surface."""
+    R, c = _local(head)
+    rim = shell[(shell[:, 0] * x > 0.03) & (shell[:, 2] < MASK_SIDE * head["radii"][2] + 0.004)]  # its side edge
+    top, bottom = rim[rim[:, 1].argmax()], rim[rim[:, 1].argmin()]
+    k = head["radii"][1] / 0.08
+    ear = (head["ears"][0 if x > 0 else 1] - c) @ R
+    centre = ear + np.array([0, -0.004, -0.010]) * k
+    t = np.linspace(-0.15 * np.pi, 1.1 * np.pi, points)  # from over the ear's front, over, behind and under it
+    reach = np.where(np.cos(t) > 0, 0.034, 0.040) * k
+    ring = centre + np.column_stack([np.zeros(points), reach * np.cos(t), -0.026 * k * np.sin(t)])
+    path = np.concatenate([np.linspace(top, ring[0], 8, endpoint=False), ring,
+                           np.linspace(ring[-1], bottom, 9)[1:]])
+    path[1:-1, 0] = x * (_surface_width(body, head, path[1:-1]) + 0.0025)  # the ends stay on the shell
+    path[1:-1, 0] = np.convolve(path[:, 0], np.ones(3) / 3, "valid")
+    return (push_out(body, path @ R.T + c, clearance=0.0025) - c) @ R
+
+
+def _surface_width(body, head, path: np.ndarray, reach: float = 0.15, step: float = 0.003) -> np.ndarray:
+    """How far out to the side of the head frame's midplane the body's outermost surface is at
+    each path point's height and depth, to 0.5 mm: marching in from ``reach`` by ``step``, then by
+    0.5 mm over the last step (cavities inside the head, such as the mouth's, do not count)."""
+    R, c = _local(head)
+    side = np.where(path[:, 0] < 0, -1.0, 1.0)
+
+    def first_inside(widths):  # (N, K) widths, decreasing -> the first inside (0 where none is)
+        q = np.repeat(path, widths.shape[1], 0)
+        q[:, 0] = (widths * side[:, None]).ravel()
+        inside = body.surface().signed_distance(q @ R.T + c).reshape(widths.shape) < 0
+        return np.where(inside.any(1), widths[np.arange(len(path)), np.argmax(inside, axis=1)], 0.0)
+    coarse = first_inside(np.tile(np.arange(reach, 0.0, -step), (len(path), 1)))
+    return first_inside(np.minimum(coarse[:, None] + step, reach) - np.arange(0.0, step + 1e-9, 0.0005)[None])
+
+
+def _tube(points: np.ndarray, radius: float, sections: int = 6, across=(1.0, 0.0, 0.0)):
+    """An open-ended tube of ``radius`` along a polyline that never runs along ``across``:
+    (vertices, faces)."""
+    tangent = np.gradient(points, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    a = np.cross(tangent, across)
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.cross(tangent, a)
+    ang = 2 * np.pi * np.arange(sections) / sections
+    v = (points[:, None] + radius * (np.cos(ang)[None, :, None] * a[:, None] + np.sin(ang)[None, :, None] * b[:, None]))
+    i = np.arange(len(points) - 1)[:, None] * sections
+    j = np.arange(sections)[None, :]
+    p, q = i + j, i + (j + 1) % sections
+    f = np.concatenate([np.stack([p, q, p + sections], -1), np.stack([q, q + sections, p + sections], -1)], 1)
+    return v.reshape(-1, 3), f.reshape(-1, 3)
 
 
 # kind -> builder(params, rest body, head {centre, radii (right, up, forward), up, forward, mask (its body

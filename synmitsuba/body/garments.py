@@ -314,7 +314,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
             v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
     n_faces, n_vertices = len(f), len(v)
     if kind.shape != "hull":
-        v, f, uv = _hem(body, v, f, uv, g.thickness)
+        v, f, uv = hem(body, v, f, uv, g.thickness)
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
 
@@ -377,10 +377,11 @@ def _over_torso(body, r: BodyRegions, v: np.ndarray) -> np.ndarray:
     return r.group[body.surface().tree.query(v)[1]] == "torso"
 
 
-def _open_edges(f: np.ndarray, merged: np.ndarray) -> np.ndarray:
+def open_edges(f: np.ndarray, merged: np.ndarray | None = None) -> np.ndarray:
     """(E, 2) directed edges a -> b (as their face winds them) that only one face has, on the
     vertices ``merged`` (``weld``) makes one: the garment's openings."""
     directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    merged = np.arange(f.max() + 1) if merged is None else merged
     m = np.sort(merged[directed], 1)
     _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
     return directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]
@@ -420,12 +421,12 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
     return (p + out[:, None] * n)[rep]
 
 
-def _hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
+def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
     """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
     thickness) deep towards the closest body point, so an edge seen in a close-up has thickness.
     Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
     the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
-    edge = _open_edges(f, weld(v))
+    edge = open_edges(f, weld(v))
     if not len(edge):
         return v, f, uv
     ends = np.unique(edge)

@@ -162,14 +162,13 @@ class LayeredHuman:
             v, f = acc.build_accessory(p, self.body, self.head)
             _, near = tree.query(v)
             colour = lab_to_linear_rgb(p.colour_lab) if p.colour_lab else (0.1, 0.1, 0.1)
-            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4,
-                           metallic=0.0 if p.kind != "watch" else 0.8)
+            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.9 if p.kind == "mask" else 0.4,
+                           metallic=0.0 if p.kind != "watch" else 0.8)  # a mask is matte cloth
             self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, None, self.body.weights[near]))
             if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
                 self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
             if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
-                gap, _ = cKDTree(v).query(self.hair.points[:, 0])
-                self.hair = self.hair.subset((self.hair.region < 5) | (gap > 0.015))
+                self.hair = self.hair.subset((self.hair.region < 5) | ~acc.mask_covers(self.head, self.hair.points[:, 0]))
 
     def _hair_weights(self):
         """The strands' skinning weights (``hair.follow_weights``): nearest body vertex's below the neck."""
