@@ -202,13 +202,28 @@ def _mask(p: AccessoryParams, body, head):
 def _mask_outline(head, v: np.ndarray) -> np.ndarray:
     """> 0 inside the mask, for head-frame points ``v`` (columns side, up, forward): under a top
     edge that rises over the nose bridge (half-way from anny's nose keypoint to its eyes) from
-    0.15 of that drop at the cheeks, above a line 1.9 drops under the nose (under the chin), in
+    0.15 of that drop at the cheeks, above a line 6 mm under the chin (``head["chin"]``), in
     front of a plane at 0.18 of the head's depth before its centre (2-3 cm short of the ears)."""
     R, c = _local(head)
     nose, eyes = (head["nose"] - c) @ R, ((head["eyes"] - c) @ R).mean(0)
     drop, x = eyes[1] - nose[1], v[:, 0] - nose[0]
     top = nose[1] + drop * (0.15 + 0.35 * np.exp(-(x / 0.015) ** 2))
-    return np.minimum.reduce([top - v[:, 1], v[:, 1] - (nose[1] - 1.9 * drop), v[:, 2] - MASK_SIDE * head["radii"][2]])
+    bottom = head["chin"] - 0.006 if "chin" in head else nose[1] - 2.7 * drop
+    return np.minimum.reduce([top - v[:, 1], v[:, 1] - bottom, v[:, 2] - MASK_SIDE * head["radii"][2]])
+
+
+def under_chin(vertices: np.ndarray, head) -> float:
+    """Head-frame height of the underside of the chin: going down the face's midline from anny's nose
+    keypoint, the first level at which the face's front is over 25 mm behind the nose keypoint
+    (the throat); 2.7 eye-to-nose drops under the nose if none is within 12 cm."""
+    R, c = _local(head)
+    v = (vertices - c) @ R
+    nose, eyes = (head["nose"] - c) @ R, ((head["eyes"] - c) @ R).mean(0)
+    mid = v[(np.abs(v[:, 0] - nose[0]) < 0.01) & (v[:, 1] < nose[1]) & (v[:, 1] > nose[1] - 0.12)]
+    for y in np.arange(nose[1] - 0.03, nose[1] - 0.12, -0.002):
+        if mid[np.abs(mid[:, 1] - y) < 0.004, 2].max(initial=-np.inf) < nose[2] - 0.025:
+            return float(y + 0.002)
+    return float(nose[1] - 2.7 * (eyes[1] - nose[1]))
 
 
 def mask_covers(head, points: np.ndarray) -> np.ndarray:
@@ -346,7 +361,7 @@ def _tube(points: np.ndarray, radius: float, sections: int = 6, across=(1.0, 0.0
 
 
 # kind -> builder(params, rest body, head {centre, radii (right, up, forward), up, forward, mask (its body
-# vertices), eyes and ears (2, 3): left, right keypoints; nose (3,)}) -> (V, F)
+# vertices), eyes and ears (2, 3): left, right keypoints; nose (3,); chin: ``under_chin``}) -> (V, F)
 BUILDERS = BUILDERS_BY_NAME
 BUILDERS.update(glasses=_glasses, cap=_cap, headphones=_headphones, backpack=_backpack, watch=_watch, mask=_mask)
 

@@ -143,6 +143,7 @@ class LayeredHuman:
                      "radii": (hi - lo) / 2, "mask": head,
                      "eyes": kp[[names.index("left_eye"), names.index("right_eye")]], "nose": kp[names.index("nose")],
                      "ears": kp[[names.index("left_ear"), names.index("right_ear")]]}
+        self.head["chin"] = acc.under_chin(body.vertices, self.head)
         idx = np.flatnonzero(head)
         remap = -np.ones(len(body.vertices), np.int64)
         remap[idx] = np.arange(len(idx))
