@@ -693,10 +693,8 @@ def test_cap_crown_ends_on_its_edge_line_and_the_bill_is_a_peak():
     bill = v[:, 2] > brow[:, 2].max() + 0.012
     edges = np.sort(np.concatenate([part.faces[:, [0, 1]], part.faces[:, [1, 2]], part.faces[:, [2, 0]]]), 1)
     uniq, count = np.unique(edges, axis=0, return_counts=True)
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    piece = connected_components(coo_matrix((np.ones(len(uniq)), tuple(uniq.T)), shape=(len(v),) * 2))[1]
-    crown = piece == np.bincount(piece).argmax()
+    crown = np.zeros(len(v), bool)
+    crown[_pieces(v, part.faces)[0]] = True
     rim = np.unique(uniq[count == 1])
     rim = rim[crown[rim] & (v[rim, 2] < brow[:, 2].max() - 0.03)]  # the crown's edge at the sides and back
     line = eyes[1] + 0.03 - 0.3 * (eyes[2] - v[rim, 2])

@@ -195,8 +195,8 @@ def _mask(p: AccessoryParams, body, head):
     shell, f, _ = hem(body, shell @ R.T + c, f, np.zeros((len(shell), 2)), 0.0015)
     loops = [_tube(_ear_loop(body, head, (shell - c) @ R, x), 0.0012) for x in (-1, 1)]
     parts = [(shell, f)] + [(q @ R.T + c, g) for q, g in loops]
-    return np.concatenate([q for q, _ in parts]), np.concatenate(
-        [g + sum(len(q) for q, _ in parts[:k]) for k, (_, g) in enumerate(parts)])
+    start = np.cumsum([0] + [len(q) for q, _ in parts[:-1]])
+    return np.concatenate([q for q, _ in parts]), np.concatenate([g + k for (_, g), k in zip(parts, start)])
 
 
 def _mask_outline(head, v: np.ndarray) -> np.ndarray:
@@ -208,8 +208,7 @@ def _mask_outline(head, v: np.ndarray) -> np.ndarray:
     nose, eyes = (head["nose"] - c) @ R, ((head["eyes"] - c) @ R).mean(0)
     drop, x = eyes[1] - nose[1], v[:, 0] - nose[0]
     top = nose[1] + drop * (0.15 + 0.35 * np.exp(-(x / 0.015) ** 2))
-    bottom = head["chin"] - 0.006 if "chin" in head else nose[1] - 2.7 * drop
-    return np.minimum.reduce([top - v[:, 1], v[:, 1] - bottom, v[:, 2] - MASK_SIDE * head["radii"][2]])
+    return np.minimum.reduce([top - v[:, 1], v[:, 1] - (head["chin"] - 0.006), v[:, 2] - MASK_SIDE * head["radii"][2]])
 
 
 def under_chin(vertices: np.ndarray, head) -> float:
@@ -243,6 +242,7 @@ def _mask_shell(body, head, v: np.ndarray, off: float = 0.005, rounds: int = 4):
     over the lips and from the chin to the neck), averaged ``rounds`` times over a 3 x 3 window
     (the tent over the nose gets a rounded ridge), cut along ``_mask_outline`` and pushed out to
     3 mm off the skin where that leaves it closer. (vertices, faces)."""
+    from scipy.ndimage import uniform_filter
     R, c = _local(head)
     arc, r = np.arctan2(v[:, 0], v[:, 2]) * 0.1, np.hypot(v[:, 0], v[:, 2])  # arc: along the face at 10 cm
     span = _mask_outline(head, v) > -0.012
@@ -258,8 +258,7 @@ def _mask_shell(body, head, v: np.ndarray, off: float = 0.005, rounds: int = 4):
     grid = np.maximum(grid, np.apply_along_axis(lambda col: _concave(gh, col), 1, grid))  # down each column
     grid = np.maximum(grid, np.apply_along_axis(lambda row: _concave(ga, row), 0, grid))  # along each row
     for _ in range(rounds):
-        grid = np.pad(grid, 1, mode="edge")
-        grid = sum(grid[a:a + grid.shape[0] - 2, b:b + grid.shape[1] - 2] for a in range(3) for b in range(3)) / 9
+        grid = uniform_filter(grid, 3, mode="nearest")
     fine = np.arange(gh[0], gh[-1], MASK_GRID / 3)  # 1 mm rows: the pleats run across them
     grid = np.stack([np.interp(fine, gh, row) for row in grid])
     gh = fine

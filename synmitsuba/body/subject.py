@@ -169,7 +169,8 @@ class LayeredHuman:
             if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
                 self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
             if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
-                self.hair = self.hair.subset((self.hair.region < 5) | ~acc.mask_covers(self.head, self.hair.points[:, 0]))
+                beard = self.hair.region >= 5  # (scalp regions are 0-4)
+                self.hair = self.hair.subset(~(beard & acc.mask_covers(self.head, self.hair.points[:, 0])))
 
     def _hair_weights(self):
         """The strands' skinning weights (``hair.follow_weights``): nearest body vertex's below the neck."""
