@@ -208,13 +208,25 @@ class BuiltScene:
     reinterpreted as UInt32): instance id, layer id and whether the shape has texture coords."""
 
     mi_scene: object
-    params: object
+    moving: object             # mi.SceneParameters of the vertex positions and control points only
     versions: tuple[int, int]
     tables: dict               # name -> numpy array indexed by registry id ("shape": 1 + index in names)
     instance_ids: list         # instance ids > 0 present in the scene
     names: list = field(default_factory=list)  # shape names (meshes, then curves), as the "shape" table counts them
     _dr_tables: dict = field(default_factory=dict)
     _pushed: dict = field(default_factory=dict)  # name -> the positions array Mitsuba holds (identity)
+    _params: object = None
+
+    @property
+    def params(self):
+        """Every parameter of the scene (``mi.traverse``), made on first use (diff binds textures
+        and lights through it). Animation goes through ``moving`` instead: ``update()`` evaluates
+        every parameter it holds, and a full traverse holds a 3-channel view of each texture,
+        which would then stay in memory beside the texture (50 MB a subject at 1024 px)."""
+        if self._params is None:
+            import mitsuba as mi
+            self._params = mi.traverse(self.mi_scene)
+        return self._params
 
     def lookup(self, name: str, reg, active):
         """Per-ray table value (UInt32) for registry ids ``reg``; 0 where not ``active``."""
@@ -231,16 +243,24 @@ def _update_in_place(cached: BuiltScene, scene: Scene) -> None:
     import mitsuba as mi
     for name, m in scene.meshes.items():
         if cached._pushed.get(name) is not m.vertices:
-            cached.params[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
+            cached.moving[f"{name}.vertex_positions"] = mi.Float(m.vertices.astype(np.float32).ravel())
             cached._pushed[name] = m.vertices
     for name, c in scene.curves.items():
         if cached._pushed.get(name) is not c.points or cached._pushed.get(f"{name}.radius") is not c.radius:
             rows = np.concatenate([c.points, c.radius[..., None]], -1).astype(np.float32)
-            cached.params[f"{name}.control_points"] = mi.Float(rows.ravel())
+            cached.moving[f"{name}.control_points"] = mi.Float(rows.ravel())
             cached._pushed[name], cached._pushed[f"{name}.radius"] = c.points, c.radius
-    cached.params.update()
+    cached.moving.update()
     cached.versions = (scene.structure_version, scene.geometry_version)
     STATS["updates"] += 1
+
+
+def _moving_params(mi_scene):
+    """The scene's parameters that animation sets: mesh vertex positions, curve control points."""
+    import mitsuba as mi
+    params = mi.traverse(mi_scene)
+    params.keep([r".*\.(vertex_positions|control_points)$"])
+    return params
 
 
 def _tables(mi_scene, scene: Scene) -> tuple[dict, list]:
@@ -336,7 +356,7 @@ def build(scene: Scene) -> BuiltScene:
         _weigh_emitters(emitters, _probe_point(scene), environment="environment" in d)
     mi_scene = mi.load_dict(d)
     tables, ids = _tables(mi_scene, scene)
-    built = BuiltScene(mi_scene, mi.traverse(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids,
+    built = BuiltScene(mi_scene, _moving_params(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids,
                        names=[*scene.meshes, *scene.curves])
     built._pushed.update({n: m.vertices for n, m in scene.meshes.items()})
     built._pushed.update({k: v for n, c in scene.curves.items() for k, v in ((n, c.points), (f"{n}.radius", c.radius))})
