@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from synmitsuba.geometry import (align_vectors, axis_rotation, camera_ray_matrix, euler_to_matrix, frame,
-                                 slerp_matrices, triangle_areas, vertex_normals, winding_numbers)
+                                 slerp_matrices, smooth_normals, triangle_areas, vertex_normals,
+                                 winding_numbers)
 
 
 def _rodrigues_min(a, b):
@@ -83,6 +84,29 @@ def test_weld_joins_points_within_a_micrometre_whatever_the_grid():
     d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)  # brute force: same group iff within 1e-6
     assert ((rep[:, None] == rep[None]) == (d <= 1e-6)).all()
     assert (rep <= np.arange(len(pts))).all()  # the lowest index of its group
+
+
+def test_smooth_normals_run_across_seams_and_keep_opposite_sheets_apart():
+    """A sphere with every triangle cut loose (each vertex copied once per face, as uv seams
+    copy vertices): welded, every copy gets the area-weighted normal of the whole sphere (trimesh's)
+    (radial to within a degree); unwelded, each copy only its own face's normal. Two sheets
+    through the same points facing away from each other keep their own normals."""
+    import trimesh
+
+    from synmitsuba.body.topology import weld
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    v, f = ico.vertices[ico.faces].reshape(-1, 3), np.arange(3 * len(ico.faces)).reshape(-1, 3)
+    n = smooth_normals(v, f, weld(v))
+    expected = vertex_normals(ico.vertices, ico.faces)[ico.faces].reshape(-1, 3)
+    assert np.abs(n - expected).max() < 1e-9
+    assert np.degrees(np.arccos(np.clip((n * v).sum(1) / np.linalg.norm(v, axis=1), -1, 1))).max() < 1.0
+    flat = smooth_normals(v, f, np.arange(len(v)))
+    assert np.abs(flat - np.repeat(ico.face_normals, 3, axis=0)).max() < 1e-9
+    quad = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    both = np.concatenate([quad, quad])
+    faces = np.array([[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]])  # the copy is wound the other way
+    sheets = smooth_normals(both, faces, weld(both))
+    assert np.allclose(sheets[:4], [0, 0, 1]) and np.allclose(sheets[4:], [0, 0, -1])
 
 
 def test_winding_numbers_and_signed_distance_agree_with_a_torus():

@@ -175,8 +175,29 @@ def test_update_mesh_moves_geometry_without_rebuilding(sm):
     assert s2.depth[8, 8] == pytest.approx(3.95, abs=1e-5)
 
 
+def test_moved_normals_are_the_ones_given(sm):
+    """A mesh moved in place with new normals shades with those normals (pushed after the
+    positions, whose update makes Mitsuba recompute its own from the faces); moved without
+    new normals, it gets the faces' own again."""
+    scene = sm.Scene()
+    v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    scene.add_mesh("quad", v, f, normals=np.tile([0.0, 0.0, 1.0], (4, 1)), instance=1)
+    cam = sm.Camera.look_at(eye=(0, 0, 3), target=(0, 0, 0), width=16, height=16)
+    sm.render(scene, cam, spp=1)
+    tilted = np.tile([0.6, 0.0, 0.8], (4, 1))
+    scene.update_mesh("quad", v + [0, 0, -0.5], tilted)
+    s = sm.render(scene, cam, spp=1)
+    world = s.normal[s.mask] @ cam.R  # camera frame -> world
+    assert np.abs(world - [0.6, 0.0, 0.8]).max() < 1e-5
+    assert s.depth[8, 8] == pytest.approx(3.5, abs=1e-5)
+    scene.update_mesh("quad", v)
+    s = sm.render(scene, cam, spp=1)
+    assert np.abs(s.normal[s.mask] @ cam.R - [0.0, 0.0, 1.0]).max() < 1e-5
+
+
 def test_moving_a_textured_mesh_allocates_no_copy_of_its_texture(sm):
-    """An in-place update evaluates only what it holds: vertex positions and control points.
+    """An in-place update evaluates only what it holds: vertex positions, normals and control points.
     (A whole-scene ``mi.traverse`` holds a 3-channel view of each texture, which ``update()``
     evaluated and kept beside the texture: 16 MiB for this 1024-px map.)"""
     import drjit as dr
@@ -196,7 +217,7 @@ def test_moving_a_textured_mesh_allocates_no_copy_of_its_texture(sm):
     before = dr.detail.malloc_watermark(backend)
     scene.update_mesh("quad", v + [0, 0, -0.5])
     built = build(scene)
-    assert sorted(built.moving.keys()) == ["quad.vertex_positions"]
+    assert sorted(built.moving.keys()) == ["quad.vertex_normals", "quad.vertex_positions"]
     assert dr.detail.malloc_watermark(backend) - before < 1 << 20
     assert sm.render(scene, cam, spp=1).depth[8, 8] == pytest.approx(3.5, abs=1e-5)
 

@@ -199,6 +199,18 @@ def _mask(p: AccessoryParams, body, head):
     return np.concatenate([q for q, _ in parts]), np.concatenate([g + k for (_, g), k in zip(parts, start)])
 
 
+def mask_uv(head, vertices: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
+    """Cloth coordinates of a mask's vertices (world, rest pose): u along the face round the
+    head's vertical axis (arc at the mask's median distance from it), v up, each scaled to
+    [0, 1] over the mask; and the metres each spans, so that a weave's tiles come out at
+    thread size. The ear loops run round the head too, so their u grows along them."""
+    R, c = _local(head)
+    v = (np.asarray(vertices) - c) @ R
+    arc = np.arctan2(v[:, 0], v[:, 2]) * np.median(np.hypot(v[:, 0], v[:, 2]))
+    lo, span = np.array([arc.min(), v[:, 1].min()]), np.array([np.ptp(arc), np.ptp(v[:, 1])])
+    return (np.stack([arc, v[:, 1]], 1) - lo) / np.maximum(span, 1e-9), (float(span[0]), float(span[1]))
+
+
 def _mask_outline(head, v: np.ndarray) -> np.ndarray:
     """> 0 inside the mask, for head-frame points ``v`` (columns side, up, forward): under a top
     edge that rises over the nose bridge (half-way from anny's nose keypoint to its eyes) from

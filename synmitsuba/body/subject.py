@@ -18,10 +18,11 @@ from synmitsuba.body.hair import (Strands, follow_weights, grow_hair, hair_colou
                                   scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
-from synmitsuba.body.textures import garment_material, lab_to_linear_rgb, paint_uv, skin_material
-from synmitsuba.body.topology import split_at_seams
+from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
+                                      skin_material)
+from synmitsuba.body.topology import split_at_seams, weld
 from synmitsuba.errors import ConfigError
-from synmitsuba.geometry import vertex_normals
+from synmitsuba.geometry import SmoothNormals, vertex_normals
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.materials import Material
 
@@ -163,9 +164,14 @@ class LayeredHuman:
             v, f = acc.build_accessory(p, self.body, self.head)
             _, near = tree.query(v)
             colour = lab_to_linear_rgb(p.colour_lab) if p.colour_lab else (0.1, 0.1, 0.1)
-            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.9 if p.kind == "mask" else 0.4,
-                           metallic=0.0 if p.kind != "watch" else 0.8)  # a mask is matte cloth
-            self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, None, self.body.weights[near]))
+            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4,
+                           metallic=0.0 if p.kind != "watch" else 0.8)
+            uv = None
+            if p.kind == "mask":  # matte cloth with a plain weave at thread size
+                uv, metres = acc.mask_uv(self.head, v)
+                mat = dataclasses.replace(mat, roughness=0.9, normal_map=fabric_normal_map("plain"),
+                                          normal_map_repeat=fabric_repeat("plain", metres))
+            self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, uv, self.body.weights[near]))
             if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
                 self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
             if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
@@ -267,12 +273,25 @@ class LayeredHuman:
                 else:
                     scene.add_curves(name, layer.points, layer.radius, material=layer.material, instance=instance,
                                      layer=layer.layer)
-            elif name in scene.meshes:
-                scene.update_mesh(name, layer.vertices)
             else:
-                scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv, material=layer.material,
-                               instance=instance, layer=layer.layer)
+                normals = self._normals(layer.name)(layer.vertices)
+                if name in scene.meshes:
+                    scene.update_mesh(name, layer.vertices, normals)
+                else:
+                    scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv, normals=normals,
+                                   material=layer.material, instance=instance, layer=layer.layer)
         return scene
+
+    def _normals(self, part: str) -> SmoothNormals:
+        """A part's ``SmoothNormals`` over ``topology.weld`` of its rest vertices (the body and
+        garments are split along their uv seams), made once: the rendered normals are smooth
+        across the seams. Without normals Mitsuba shades every triangle flat, and anny's 2-4 cm
+        triangles showed in a close-up."""
+        made = self.__dict__.setdefault("_smooth_normals", {})
+        if part not in made:
+            p = next(p for p in self.parts if p.name == part)
+            made[part] = SmoothNormals(p.faces, weld(p.rest), p.rest)
+        return made[part]
 
 
 def build_subject(recipe: SubjectRecipe) -> LayeredHuman:

@@ -291,6 +291,11 @@ def fabric_normal_map(fabric: str, size: int = 64, relief: float = 0.12) -> np.n
     return (0.5 * n + 0.5).astype(np.float32)
 
 
+def fabric_repeat(fabric: str, metres_per_uv) -> tuple:
+    """How often a ``fabric`` tile repeats along u and v for cloth spanning ``metres_per_uv``."""
+    return tuple(max(1.0, round(m / FABRIC_TILE_M[fabric])) for m in metres_per_uv)
+
+
 def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float = 0.8, fabric: str = "none",
                      metres_per_uv=(1.0, 1.0)):
     """The garment's material: albedo and pattern bump at ``size``, and where its fabric (``p.weave``,
@@ -301,8 +306,7 @@ def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float 
     weave = fabric if p.weave == "auto" else p.weave
     normal, repeat = None, (1.0, 1.0)
     if weave != "none":
-        normal = fabric_normal_map(weave)
-        repeat = tuple(max(1.0, round(m / FABRIC_TILE_M[weave])) for m in metres_per_uv)
+        normal, repeat = fabric_normal_map(weave), fabric_repeat(weave, metres_per_uv)
     return Material(texture=albedo, bump=height if p.bump != "none" else None, bump_scale=0.002,
                     kind="principled", roughness=roughness, specular=0.3, normal_map=normal,
                     normal_map_repeat=repeat)

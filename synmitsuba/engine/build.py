@@ -60,14 +60,17 @@ def _mesh(shape: MeshShape):
     p["vertex_positions"] = mi.Float(shape.vertices.astype(np.float32).ravel())
     p["faces"] = mi.UInt32(shape.faces.ravel())
     if shape.normals is not None:
-        n = shape.normals / np.maximum(np.linalg.norm(shape.normals, axis=1, keepdims=True), 1e-12)
-        p["vertex_normals"] = mi.Float(n.astype(np.float32).ravel())
+        p["vertex_normals"] = mi.Float(_unit(shape.normals).astype(np.float32).ravel())
     if shape.uv is not None:  # our uv has v up (OBJ); Mitsuba's bitmap row 0 is at v = 0
         uv = np.stack([shape.uv[:, 0], 1.0 - shape.uv[:, 1]], 1)
         p["vertex_texcoords"] = mi.Float(uv.astype(np.float32).ravel())
     p.update()
     m.set_bsdf(mi.load_dict(bsdf_dict(shape.material)))
     return m
+
+
+def _unit(n: np.ndarray) -> np.ndarray:
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
 
 
 def _curves(shape: CurveShape):
@@ -223,7 +226,7 @@ class BuiltScene:
     reinterpreted as UInt32): instance id, layer id and whether the shape has texture coords."""
 
     mi_scene: object
-    moving: object             # mi.SceneParameters of the vertex positions and control points only
+    moving: object             # mi.SceneParameters of vertex positions, normals and control points only
     versions: tuple[int, int]
     tables: dict               # name -> numpy array indexed by registry id ("shape": 1 + index in names)
     instance_ids: list         # instance ids > 0 present in the scene
@@ -266,15 +269,23 @@ def _update_in_place(cached: BuiltScene, scene: Scene) -> None:
             cached.moving[f"{name}.control_points"] = _aligned_floats(rows)
             cached._pushed[name], cached._pushed[f"{name}.radius"] = c.points, c.radius
     cached.moving.update()
+    normals = [(name, m.normals) for name, m in scene.meshes.items()
+               if m.normals is not None and cached._pushed.get(f"{name}.normals") is not m.normals]
+    for name, n in normals:  # after the positions: moving them made Mitsuba recompute its own
+        cached.moving[f"{name}.vertex_normals"] = mi.Float(_unit(n).astype(np.float32).ravel())
+        cached._pushed[f"{name}.normals"] = n
+    if normals:
+        cached.moving.update()  # normals alone: no rebuild (under a millisecond)
     cached.versions = (scene.structure_version, scene.geometry_version)
     STATS["updates"] += 1
 
 
 def _moving_params(mi_scene):
-    """The scene's parameters that animation sets: mesh vertex positions, curve control points."""
+    """The scene's parameters that animation sets: mesh vertex positions and normals, curve
+    control points."""
     import mitsuba as mi
     params = mi.traverse(mi_scene)
-    params.keep([r".*\.(vertex_positions|control_points)$"])
+    params.keep([r".*\.(vertex_positions|vertex_normals|control_points)$"])
     return params
 
 
@@ -374,6 +385,7 @@ def build(scene: Scene) -> BuiltScene:
     built = BuiltScene(mi_scene, _moving_params(mi_scene), (scene.structure_version, scene.geometry_version), tables, ids,
                        names=[*scene.meshes, *scene.curves])
     built._pushed.update({n: m.vertices for n, m in scene.meshes.items()})
+    built._pushed.update({f"{n}.normals": m.normals for n, m in scene.meshes.items()})
     built._pushed.update({k: v for n, c in scene.curves.items() for k, v in ((n, c.points), (f"{n}.radius", c.radius))})
     scene._built = built
     STATS["loads"] += 1

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import vertex_normals
 from synmitsuba.schema import Number
 from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
                                         PointLight, SunSky)
@@ -125,13 +126,23 @@ class Scene:
         self.structure_version += 1
         return shape
 
-    def update_mesh(self, name: str, vertices) -> None:
-        """Move a mesh's vertices (same count); the next render updates Mitsuba in place."""
+    def update_mesh(self, name: str, vertices, normals=None) -> None:
+        """Move a mesh's vertices (same count), with new per-vertex normals if given (else a mesh
+        that has normals gets area-weighted ones from its faces); the next render updates
+        Mitsuba in place."""
         if name not in self.meshes:
             raise ConfigError("shape name", name, f"no mesh of that name; meshes: {', '.join(self.meshes)}")
         mesh = self.meshes[name]
         v = np.asarray(vertices, dtype=np.float64)
         _finite(f"{name}.vertices", v, f"{len(mesh.vertices)} x 3", v.shape == mesh.vertices.shape)
+        if normals is not None:
+            n = np.asarray(normals, dtype=np.float64)
+            _finite(f"{name}.normals", n, f"{len(mesh.vertices)} x 3", n.shape == mesh.vertices.shape)
+            if mesh.normals is None:
+                raise ConfigError(f"{name}.normals", "new normals", "add the mesh with normals to move them with it")
+            mesh.normals = n
+        elif mesh.normals is not None:
+            mesh.normals = vertex_normals(v, mesh.faces)
         mesh.previous_vertices, mesh.vertices = mesh.vertices, v
         self.geometry_version += 1
 
