@@ -131,11 +131,6 @@ class SmoothNormals:
         return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
 
 
-def smooth_normals(vertices: np.ndarray, faces: np.ndarray, weld: np.ndarray) -> np.ndarray:
-    """``SmoothNormals(faces, weld, vertices)(vertices)``, for one mesh once."""
-    return SmoothNormals(faces, weld, vertices)(vertices)
-
-
 def face_normals(triangles: np.ndarray) -> np.ndarray:
     """Unit normals (N, 3) of triangles (N, 3, 3); zero for degenerate ones."""
     import trimesh

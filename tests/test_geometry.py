@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from synmitsuba.geometry import (align_vectors, axis_rotation, camera_ray_matrix, euler_to_matrix, frame,
-                                 slerp_matrices, smooth_normals, triangle_areas, vertex_normals,
+                                 slerp_matrices, SmoothNormals, triangle_areas, vertex_normals,
                                  winding_numbers)
 
 
@@ -96,16 +96,16 @@ def test_smooth_normals_run_across_seams_and_keep_opposite_sheets_apart():
     from synmitsuba.body.topology import weld
     ico = trimesh.creation.icosphere(subdivisions=3)
     v, f = ico.vertices[ico.faces].reshape(-1, 3), np.arange(3 * len(ico.faces)).reshape(-1, 3)
-    n = smooth_normals(v, f, weld(v))
+    n = SmoothNormals(f, weld(v), v)(v)
     expected = vertex_normals(ico.vertices, ico.faces)[ico.faces].reshape(-1, 3)
     assert np.abs(n - expected).max() < 1e-9
     assert np.degrees(np.arccos(np.clip((n * v).sum(1) / np.linalg.norm(v, axis=1), -1, 1))).max() < 1.0
-    flat = smooth_normals(v, f, np.arange(len(v)))
+    flat = SmoothNormals(f, np.arange(len(v)), v)(v)
     assert np.abs(flat - np.repeat(ico.face_normals, 3, axis=0)).max() < 1e-9
     quad = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     both = np.concatenate([quad, quad])
     faces = np.array([[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]])  # the copy is wound the other way
-    sheets = smooth_normals(both, faces, weld(both))
+    sheets = SmoothNormals(faces, weld(both), both)(both)
     assert np.allclose(sheets[:4], [0, 0, 1]) and np.allclose(sheets[4:], [0, 0, -1])
 
 

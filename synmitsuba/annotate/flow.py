@@ -94,7 +94,7 @@ def geometry_copy(scene: Scene) -> Scene:
     another frame's geometry for visibility tests (no textures, no lights)."""
     copy = Scene()
     for name, m in scene.meshes.items():
-        copy.add_mesh(name, m.vertices, m.faces, normals=m.normals, instance=m.instance, layer=m.layer)
+        copy.add_mesh(name, m.vertices, m.faces, instance=m.instance, layer=m.layer)
     for name, c in scene.curves.items():
         copy.add_curves(name, c.points, c.radius, instance=c.instance, layer=c.layer)
     return copy

@@ -273,13 +273,13 @@ class LayeredHuman:
                 else:
                     scene.add_curves(name, layer.points, layer.radius, material=layer.material, instance=instance,
                                      layer=layer.layer)
+            elif name in scene.meshes:  # a copy held for visibility tests (flow) has no normals to move
+                shaded = scene.meshes[name].normals is not None
+                scene.update_mesh(name, layer.vertices, self._normals(layer.name)(layer.vertices) if shaded else None)
             else:
-                normals = self._normals(layer.name)(layer.vertices)
-                if name in scene.meshes:
-                    scene.update_mesh(name, layer.vertices, normals)
-                else:
-                    scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv, normals=normals,
-                                   material=layer.material, instance=instance, layer=layer.layer)
+                scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv,
+                               normals=self._normals(layer.name)(layer.vertices), material=layer.material,
+                               instance=instance, layer=layer.layer)
         return scene
 
     def _normals(self, part: str) -> SmoothNormals:

@@ -232,7 +232,7 @@ class BuiltScene:
     instance_ids: list         # instance ids > 0 present in the scene
     names: list = field(default_factory=list)  # shape names (meshes, then curves), as the "shape" table counts them
     _dr_tables: dict = field(default_factory=dict)
-    _pushed: dict = field(default_factory=dict)  # name -> the positions array Mitsuba holds (identity)
+    _pushed: dict = field(default_factory=dict)  # name (+ '.normals', '.radius') -> the array Mitsuba holds (identity)
     _params: object = None
 
     @property
