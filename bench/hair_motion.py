@@ -1,10 +1,12 @@
 """Hair under motion (issue 12): strands rigid with the head against strands that follow the body
-below the neck (``hair.follow_weights``), on random subjects with long, shoulder-length and bob
+below the neck (``hair.follow_weights``) and against those also kept from stretching and off the
+body (``pose(resolve=True)``: ``hair.limit_stretch``), on random subjects with long, shoulder-length and bob
 hair x walk, run, squat, jump, wave and three head poses (turned 70 deg, bent 35 deg forward,
 tilted 35 deg sideways), every ``--stride``-th frame. A strand point (roots aside) is inside when
 it lies behind the closest posed body point and its winding number in the posed body is over
-1/2 (every 4th strand is measured). Also: strand stretch (99.5th percentile of a segment's length over its rest length) and the
-cost of posing the strands. Prints JSON.
+1/2 (every 4th strand is measured). Also: strand stretch (99.5th percentile of a segment's
+length over its rest length) and the cost of posing the strands (``settle``: what shortening
+and clearing adds). Prints JSON.
 
     python bench/hair_motion.py [--subjects 6] [--stride 4]
 """
@@ -52,7 +54,8 @@ def main(argv=None) -> int:
     ap.add_argument("--subjects", type=int, default=6)
     ap.add_argument("--stride", type=int, default=4)
     args = ap.parse_args(argv)
-    rows, cost = {}, {"rigid": [], "follow": []}
+    from synmitsuba.body.collide import Surface
+    rows, cost = {}, {"rigid": [], "follow": [], "settle": []}
     for s in range(args.subjects):
         style = STYLES[s % len(STYLES)]
         h = sm.build_subject(sm.sample_subject(np.random.default_rng(s), {"texture_size": 64, "hair_style": style,
@@ -66,14 +69,24 @@ def main(argv=None) -> int:
             m = sm.retarget(load_motion(motion, np.random.default_rng(s), seconds=1.0), h.skeleton)
             frames.append((motion, [m.frame(f) for f in range(0, m.n_frames, args.stride)]))
         for name, poses in frames:
-            for mode, w in (("rigid", rigid), ("follow", follow)):
+            for mode, w in (("rigid", rigid), ("follow", follow), ("settled", follow)):
                 h.hair_weights = w
                 r = rows.setdefault(f"{style}/{name}", {}).setdefault(mode, [0, 0, 0.0, 0.0])
                 for rot, root in poses:
                     h._posed.clear()
                     t = time.perf_counter()
-                    layers = h.pose(rot, root, resolve=False)
-                    cost[mode].append(time.perf_counter() - t)
+                    layers = h.pose(rot, root, resolve=mode == "settled")
+                    if mode != "settled":
+                        cost[mode].append(time.perf_counter() - t)
+                    else:
+                        T, body = h._transforms(rot, root), np.empty_like(h.body.vertices)
+                        body[h.split.source] = layers[0].vertices
+                        surface = Surface.of(body, h.body.faces, h._incidence, h._around)
+                        t = time.perf_counter()
+                        h._pose_strands(T, surface)
+                        t1 = time.perf_counter()
+                        h._pose_strands(T, None)
+                        cost["settle"].append(2 * t1 - t - time.perf_counter())
                     pts = next(x for x in layers if x.name == "hair").points[::4]
                     k, deepest = inside_share(h, layers, pts[:, 1:].reshape(-1, 3))
                     stretch = np.linalg.norm(np.diff(pts, axis=1), axis=2) / np.maximum(rest_len[h.hair.region < 5][::4], 1e-9)
@@ -83,7 +96,7 @@ def main(argv=None) -> int:
     out = {k: {mode: {"inside_percent": round(100 * v[0] / max(v[1], 1), 3), "deepest_mm": round(1e3 * v[2], 1),
                       "stretch_p995": round(v[3], 3)} for mode, v in r.items()} for k, r in sorted(rows.items())}
     pooled = {mode: round(100 * sum(r[mode][0] for r in rows.values()) / sum(r[mode][1] for r in rows.values()), 3)
-              for mode in ("rigid", "follow")}
+              for mode in ("rigid", "follow", "settled")}
     print(json.dumps({"bench": "hair_motion", "subjects": args.subjects, "stride": args.stride,
                       "inside_percent_pooled": pooled,
                       "pose_ms_median": {k: round(1e3 * float(np.median(v)), 1) for k, v in cost.items()},

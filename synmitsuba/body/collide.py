@@ -21,6 +21,7 @@ and cheap for every vertex; the exact test costs ~10 us a vertex, so it goes onl
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +66,32 @@ def neighbour_mean(faces: np.ndarray, n: int):
     return sparse.diags(1.0 / np.asarray(A.sum(1)).ravel()) @ A
 
 
+def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, lateral: float = 0.03,
+                  highest: float = 0.15) -> np.ndarray:
+    """(V,) how far the garments worn over each body vertex stand out along its normal: the
+    farthest that the tangent planes at the 8 nearest vertices of each garment (``layers``:
+    (rest vertices, faces) pairs) meet the normal's line, counting the vertices within
+    ``lateral`` metres of the line (a collar's edge is beside the neck, not over it). Hair is
+    laid over this shell: 3 mm over the body, long hair went under a jacket at the back and
+    came out at its tips."""
+    from pykdtree.kdtree import KDTree
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    out = np.zeros(len(v))
+    for g, faces in layers:
+        g = np.ascontiguousarray(g, dtype=np.float64)
+        _, near = KDTree(g).query(v, k=8)  # not only the nearest: under a rolled hem that is its inside
+        near = near.astype(np.int64)
+        d = g[near] - v[:, None]
+        n = normals[:, None]
+        h = np.einsum("nki,nki->nk", d, np.broadcast_to(n, d.shape))
+        side = np.sqrt(np.maximum(np.einsum("nki,nki->nk", d, d) - h * h, 0.0))
+        gn = _normals(g, np.asarray(faces), incidence(faces, len(g)))[near]
+        facing = np.einsum("nki,nki->nk", np.broadcast_to(n, gn.shape), gn)
+        h = np.where(facing > 0.5, np.einsum("nki,nki->nk", d, gn) / np.maximum(facing, 0.5), h)  # curved shells
+        out = np.maximum(out, np.where((h > 0) & (h < highest) & (side < lateral), h, 0.0).max(1))
+    return out
+
+
 @dataclass
 class Surface:
     """A posed surface that garments are pushed out of."""
@@ -74,6 +101,7 @@ class Surface:
     tree: object
     faces: np.ndarray | None = None
     around: np.ndarray | None = None  # binding.incident_faces, for ``clearance``
+    lift: np.ndarray | None = None  # (V,) metres the surface stands over each vertex (``lifted``)
 
     @classmethod
     def of(cls, vertices: np.ndarray, faces: np.ndarray, vf, around=None) -> "Surface":
@@ -83,19 +111,28 @@ class Surface:
         vertices = np.ascontiguousarray(vertices, dtype=np.float64)  # answers (queries in OpenMP threads)
         return cls(vertices, _normals(vertices, faces, vf), KDTree(vertices), np.asarray(faces), around)
 
+    def lifted(self, lift: np.ndarray) -> "Surface":
+        """This surface raised by ``lift`` (V,) metres over each vertex: the body under the
+        garments worn over it (``cover_heights``), which hair lies on."""
+        return dataclasses.replace(self, lift=np.asarray(lift, dtype=np.float64))
+
+    def _raise(self, height: np.ndarray, near: np.ndarray) -> np.ndarray:
+        return height if self.lift is None else height - self.lift[near]
+
     def clearance(self, points: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
         """(height (N,), outward normal (N, 3)): the lowest over the tangent planes of the 4
         nearest vertices, made exact (closest point on the triangles around the 2 nearest)
         where it is under ``band``."""
         _, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=4)
         near = near.astype(np.int64)
-        h = np.einsum("nka,nka->nk", points[:, None] - self.vertices[near], self.normals[near])
+        h = self._raise(np.einsum("nka,nka->nk", points[:, None] - self.vertices[near], self.normals[near]), near)
         low = h.argmin(1)
         rows = np.arange(len(points))
         height, normals = h[rows, low], self.normals[near[rows, low]]
         look = np.flatnonzero(height < band)
         if len(look):
             height[look], normals[look] = self._exact(points[look], near[look, :2])
+            height[look] = self._raise(height[look], near[look, 0])
         return height, normals
 
     def _exact(self, points: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -123,7 +160,7 @@ class Surface:
         found = np.isfinite(dist)
         near = np.where(found, near, 0)
         n = self.normals[near]
-        h = np.einsum("ij,ij->i", points - self.vertices[near], n)
+        h = self._raise(np.einsum("ij,ij->i", points - self.vertices[near], n), near)
         return np.where(found, h, np.inf), n
 
 

@@ -8,7 +8,8 @@ the face; thousands of thin, tapered children take the shape of their nearest gu
 across the part), gathered towards one guide's tip in locks. Control points lie close together
 at the root, where a strand bends round the head. An afro is shortened into a rounded envelope
 (``ENVELOPES``); afro and curly strands wind in coils (``COILS``). Strands move with the head
-bone down to the neck and with the body under them below it (``follow_weights``); the scalp
+bone down to the neck and with the body under them below it (``follow_weights``), kept from
+stretching where they cross between the two (``limit_stretch``); the scalp
 under them is tinted with the hair's colour (``hair_colour``, ``root_cover``).
 """
 from __future__ import annotations
@@ -542,6 +543,39 @@ def follow_weights(strands: Strands, head_joint: np.ndarray, head_bone: int, nea
         return rigid
     blended = sparse.diags(b[follow]) @ near_weights(pts[follow])
     return (rigid + _rows(blended, follow, len(pts))).tocsr()
+
+
+STRETCH = 1.15  # a posed strand segment may be at most this many times its rest length
+HAIR_CLEARANCE = 0.002  # metres a walked strand's points are kept off the posed body and its garments
+
+
+def limit_stretch(points: np.ndarray, rest: np.ndarray, clear=None, limit: float = STRETCH) -> np.ndarray:
+    """Skinned strands (N, K, 3) whose segments grew past ``limit`` times their ``rest`` lengths
+    (N, K - 1) walked again from the root out: each segment keeps its skinned direction and at
+    most ``limit`` times its length; ``clear`` ((M, 3) points -> the same kept off the body)
+    moves each new point before the next segment starts from it, and the segment into it is
+    then cut back to length. Where a strand crosses from the head to the shoulders a turned
+    head pulled it up to 2.5x long. Returns new points; the input is not changed."""
+    seg = np.diff(points, axis=1)
+    length = np.sqrt(np.einsum("nki,nki->nk", seg, seg))
+    cap = limit * rest
+    over = np.flatnonzero((length > cap).any(1))
+    out = points.copy()
+    if not len(over):
+        return out
+    p, seg, length, cap = out[over], seg[over], length[over], cap[over]
+    walked = np.zeros(len(over), bool)  # from a point that moved: the rest of the strand is walked too
+    for k in range(1, p.shape[1]):
+        walked |= length[:, k - 1] > cap[:, k - 1]
+        w = np.flatnonzero(walked)
+        q = p[w, k - 1] + seg[w, k - 1] * np.minimum(1.0, cap[w, k - 1] / np.maximum(length[w, k - 1], 1e-12))[:, None]
+        if clear is not None:
+            d = clear(q) - p[w, k - 1]
+            dl = np.sqrt(np.einsum("ni,ni->n", d, d))
+            q = p[w, k - 1] + d * np.minimum(1.0, cap[w, k - 1] / np.maximum(dl, 1e-12))[:, None]
+        p[w, k] = q
+    out[over] = p
+    return out
 
 
 def _rows(m, rows: np.ndarray, n: int):

@@ -11,11 +11,11 @@ import numpy as np
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
-from synmitsuba.body.collide import GarmentCollider, Surface, incidence
+from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights, build_garment,
                                       garment_offset, metres_per_uv)
-from synmitsuba.body.hair import (Strands, follow_weights, grow_hair, hair_colour, hair_material, root_cover,
-                                  scalp_regions_from_head, strand_melanin)
+from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
+                                  limit_stretch, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
@@ -153,8 +153,9 @@ class LayeredHuman:
         normals = vertex_normals(body.vertices, body.faces)[idx]
         scalp = scalp_regions_from_head(hv, normals, f, centre, [0, 1, 0], [0, 0, 1])
         self.scalp = scalp
-        self.hair: Strands = grow_hair(self.recipe.hair, scalp, Surface.of(body.vertices, body.faces, self._incidence),
-                                       self.head["ears"])
+        surface = Surface.of(body.vertices, body.faces, self._incidence)
+        self.hair_lift = cover_heights(body.vertices, surface.normals, [(p.rest, p.faces) for p in self.parts[1:]])
+        self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head["ears"])
         self.head_bone = sk.index("head")
 
     def _build_accessories(self) -> None:
@@ -227,11 +228,9 @@ class LayeredHuman:
             return [dataclasses.replace(layer) for layer in self._posed[key]]
         out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest, p.skinning_weights, T), p.faces, p.uv)
                for p in self.parts]
-        if resolve:
-            self._resolve(out)
+        surface = self._resolve(out) if resolve else None
         if len(self.hair):
-            hair = dataclasses.replace(self.hair, points=skin(self.hair.points.reshape(-1, 3), self.hair_weights, T
-                                                              ).reshape(self.hair.points.shape))
+            hair = dataclasses.replace(self.hair, points=self._pose_strands(T, surface))
             scalp = hair.region < 5
             shade = self.hair_shade
             if scalp.any():
@@ -245,8 +244,34 @@ class LayeredHuman:
         self._posed[key] = out
         return [dataclasses.replace(layer) for layer in out]
 
-    def _resolve(self, layers: list[PosedLayer], calibrate: bool = False) -> None:
-        """Garments (inner first) out of the posed body, then out of the garments under them."""
+    def _pose_strands(self, T, surface: Surface | None) -> np.ndarray:
+        """Skinned strands (N, K, 3); with the posed body's ``surface``, scalp strands that
+        stretched are shortened (``hair.limit_stretch``) and their points kept off the body and
+        the garments over it (``hair_lift``): pulled back towards a turned head they would cut
+        into the neck and shoulders."""
+        pts = skin(self.hair.points.reshape(-1, 3), self.hair_weights, T).reshape(self.hair.points.shape)
+        if surface is None:
+            return pts
+        scalp = np.flatnonzero(self.hair.region < 5)
+        shell = surface.lifted(self.hair_lift)
+
+        def clear(q: np.ndarray) -> np.ndarray:
+            height, normals = shell.depth(q)  # the nearest vertex's tangent plane: a garment's test is
+            # exact where it matters, for hair a few millimetres do not show
+            return q + np.clip(HAIR_CLEARANCE - height, 0.0, None)[:, None] * normals
+
+        pts[scalp] = limit_stretch(pts[scalp], self._strand_rest, clear)
+        return pts
+
+    @functools.cached_property
+    def _strand_rest(self) -> np.ndarray:
+        """Rest lengths (N, K - 1) of the scalp strands' segments."""
+        seg = np.diff(self.hair.points[self.hair.region < 5], axis=1)
+        return np.sqrt(np.einsum("nki,nki->nk", seg, seg))
+
+    def _resolve(self, layers: list[PosedLayer], calibrate: bool = False) -> Surface:
+        """Garments (inner first) out of the posed body, then out of the garments under them;
+        returns the posed body's surface."""
         body = np.empty_like(self.body.vertices)
         body[self.split.source] = layers[0].vertices
         surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), []
@@ -256,6 +281,7 @@ class LayeredHuman:
             layer.vertices = part.collider.resolve(layer.vertices, surface, inner, calibrate)
             if part.inner:
                 inner.append(Surface.of(layer.vertices, layer.faces, part.collider.incidence))
+        return surface
 
     def keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
         """COCO-17 + 6 foot keypoints (23, 3), world metres, from anny's regressor."""
