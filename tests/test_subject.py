@@ -563,9 +563,10 @@ def test_cover_heights_read_a_garment_over_half_a_plane():
 def test_long_hair_lies_over_the_garments(long_haired):
     """Strands are laid over the garments worn under them (``collide.cover_heights``): from
     almost no strand point does a ray along the outward normal of the nearest body vertex meet
-    a garment within 10 cm (Mitsuba's ray casts on the garments alone). Laid 3 mm over the
-    body, 27 % of this subject's points went under the long sleeve and 6.5 % under the jacket,
-    and long hair came out below a jacket's back only at its tips."""
+    a garment within 10 cm (Mitsuba's ray casts on the garments alone; 1.7 % now: hair past
+    the jaw, whose ray meets the collar 5 cm on). Laid 3 mm over the body, 27 % of this
+    subject's points went under the long sleeve and 6.5 % under the jacket, and long hair came
+    out below a jacket's back only at its tips."""
     from scipy.spatial import cKDTree
     from synmitsuba.engine.raycast import cast
     from synmitsuba.geometry import vertex_normals
@@ -578,7 +579,7 @@ def test_long_hair_lies_over_the_garments(long_haired):
     pts = h.hair.points[h.hair.region < 5][:, 1:].reshape(-1, 3)
     near = cKDTree(h.body.vertices).query(pts)[1]
     ids, _ = cast(scene, pts, vertex_normals(h.body.vertices, h.body.faces)[near], np.full(len(pts), 0.1))
-    assert {"jacket", "longsleeve"} <= {p.name for p in h.parts} and (ids > 0).mean() < 0.02, (ids > 0).mean()
+    assert {"jacket", "longsleeve"} <= {p.name for p in h.parts} and (ids > 0).mean() < 0.03, (ids > 0).mean()
 
 
 def test_every_texture_parameter_changes_the_texture():

@@ -66,7 +66,7 @@ def neighbour_mean(faces: np.ndarray, n: int):
     return sparse.diags(1.0 / np.asarray(A.sum(1)).ravel()) @ A
 
 
-def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, lateral: float = 0.03,
+def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, lateral: float = 0.015,
                   highest: float = 0.15) -> np.ndarray:
     """(V,) how far the garments worn over each body vertex stand out along its normal: the
     farthest that the tangent planes at the 8 nearest vertices of each garment (``layers``:
