@@ -66,17 +66,19 @@ def neighbour_mean(faces: np.ndarray, n: int):
     return sparse.diags(1.0 / np.asarray(A.sum(1)).ravel()) @ A
 
 
-def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, lateral: float = 0.015,
-                  highest: float = 0.15) -> np.ndarray:
+def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, where: np.ndarray | None = None,
+                  lateral: float = 0.015, highest: float = 0.15) -> np.ndarray:
     """(V,) how far the garments worn over each body vertex stand out along its normal: the
     farthest that the tangent planes at the 8 nearest vertices of each garment (``layers``:
     (rest vertices, faces) pairs) meet the normal's line, counting the vertices within
     ``lateral`` metres of the line (a collar's edge is beside the neck, not over it). Hair is
     laid over this shell: 3 mm over the body, long hair went under a jacket at the back and
-    came out at its tips."""
+    came out at its tips. Only at the vertices ``where`` (a mask) when given, 0 elsewhere."""
     from pykdtree.kdtree import KDTree
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    out = np.zeros(len(v))
+    out = np.zeros(len(vertices))
+    ids = np.arange(len(vertices)) if where is None else np.flatnonzero(where)
+    v, normals = np.ascontiguousarray(vertices[ids], dtype=np.float64), normals[ids]
+    lift = np.zeros(len(ids))
     for g, faces in layers:
         g = np.ascontiguousarray(g, dtype=np.float64)
         _, near = KDTree(g).query(v, k=8)  # not only the nearest: under a rolled hem that is its inside
@@ -88,7 +90,8 @@ def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, later
         gn = _normals(g, np.asarray(faces), incidence(faces, len(g)))[near]
         facing = np.einsum("nki,nki->nk", np.broadcast_to(n, gn.shape), gn)
         h = np.where(facing > 0.5, np.einsum("nki,nki->nk", d, gn) / np.maximum(facing, 0.5), h)  # curved shells
-        out = np.maximum(out, np.where((h > 0) & (h < highest) & (side < lateral), h, 0.0).max(1))
+        lift = np.maximum(lift, np.where((h > 0) & (h < highest) & (side < lateral), h, 0.0).max(1))
+    out[ids] = lift
     return out
 
 

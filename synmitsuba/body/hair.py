@@ -430,6 +430,11 @@ def _coil(pts: np.ndarray, normals: np.ndarray, radius: float, rng) -> np.ndarra
     return path + r[..., None] * (np.cos(angle)[..., None] * n1 + np.sin(angle)[..., None] * n2)
 
 
+def reach(params: HairParams) -> float:
+    """Metres the longest strand (hair or beard) of these parameters can run from its root."""
+    return max(max(STYLES[params.style][:5]) * params.length, BEARDS[params.beard])
+
+
 def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> Strands:
     """Strands for the style and beard, deterministic from ``params.seed``; with ``body`` (the
     rest body's ``collide.Surface``) no strand point but its root lies inside the body, and

@@ -15,7 +15,7 @@ from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, inc
 from synmitsuba.body.garments import (GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights, build_garment,
                                       garment_offset, metres_per_uv)
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
-                                  limit_stretch, root_cover, scalp_regions_from_head, strand_melanin)
+                                  limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
@@ -154,7 +154,9 @@ class LayeredHuman:
         scalp = scalp_regions_from_head(hv, normals, f, centre, [0, 1, 0], [0, 0, 1])
         self.scalp = scalp
         surface = Surface.of(body.vertices, body.faces, self._incidence)
-        self.hair_lift = cover_heights(body.vertices, surface.normals, [(p.rest, p.faces) for p in self.parts[1:]])
+        reachable = np.linalg.norm(body.vertices - centre, axis=1) < (hi - lo).max() / 2 + reach(self.recipe.hair)
+        self.hair_lift = cover_heights(body.vertices, surface.normals,
+                                       [(p.rest, p.faces) for p in self.parts[1:] if p.name != "shoes"], reachable)
         self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head["ears"])
         self.head_bone = sk.index("head")
 
