@@ -122,11 +122,11 @@ class Surface:
     def _raise(self, height: np.ndarray, near: np.ndarray) -> np.ndarray:
         return height if self.lift is None else height - self.lift[near]
 
-    def clearance(self, points: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
-        """(height (N,), outward normal (N, 3)): the lowest over the tangent planes of the 4
-        nearest vertices, made exact (closest point on the triangles around the 2 nearest)
-        where it is under ``band``."""
-        _, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=4)
+    def clearance(self, points: np.ndarray, band: float, k: int = 4) -> tuple[np.ndarray, np.ndarray]:
+        """(height (N,), outward normal (N, 3)): the lowest over the tangent planes of the ``k``
+        nearest vertices, made exact (closest point on the triangles around the nearest and
+        the lowest; around the 2 nearest where those are one) where it is under ``band``."""
+        _, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=k)
         near = near.astype(np.int64)
         h = self._raise(np.einsum("nka,nka->nk", points[:, None] - self.vertices[near], self.normals[near]), near)
         low = h.argmin(1)
@@ -134,7 +134,8 @@ class Surface:
         height, normals = h[rows, low], self.normals[near[rows, low]]
         look = np.flatnonzero(height < band)
         if len(look):
-            height[look], normals[look] = self._exact(points[look], near[look, :2])
+            around = np.stack([near[look, 0], near[look, np.where(low[look] == 0, 1, low[look])]], 1)
+            height[look], normals[look] = self._exact(points[look], around)
             height[look] = self._raise(height[look], near[look, 0])
         return height, normals
 
@@ -209,7 +210,7 @@ class GarmentCollider:
         """The body's clearance again, without smoothing, for vertices ``carried`` by their
         neighbours' push or out of an inner layer: along their own normal can be into the next
         body part (a dress between belly and thigh in a squat; out of a sleeve, into the chest)."""
-        height, normals = body.clearance(points[carried], self.margin + EXACT_BAND)
+        height, normals = body.clearance(points[carried], self.margin + EXACT_BAND, k=8)
         push = np.clip(self.floors[1][carried] - height, 0.0, None)
         points[carried] += push[:, None] * normals
 
