@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import sys
 
 import numpy as np
 
@@ -87,6 +88,7 @@ def main(argv=None) -> int:
     for s in range(args.first, args.first + args.subjects):
         h = sm.build_subject(sm.sample_subject(np.random.default_rng(s), {"texture_size": 64}))
         kinds = {g.params.kind for g in h.garments}
+        print(f"subject {s}: {sorted(kinds)}", file=sys.stderr, flush=True)  # progress of a long run
         for motion in MOTIONS:
             m = sm.retarget(load_motion(motion, np.random.default_rng(s), seconds=1.0), h.skeleton)
             for f in range(0, m.n_frames, args.stride):
