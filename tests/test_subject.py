@@ -1033,6 +1033,35 @@ def test_clearance_reads_the_side_of_a_coarse_torus_where_one_vertex_cannot():
     assert ((surface.depth(p)[0] < 0) != (d < 0)).sum() > 100
 
 
+def test_clearance_on_more_vertices_finds_a_part_pressed_against_a_denser_one():
+    """A point 3.5 mm inside a coarse ball (an arm) that hangs 4 mm over a dense sheet (the
+    torso), under the ball's lowest face: its 4 nearest vertices are all on the sheet, whose
+    planes read it 7.5 mm outside; over its 8 nearest (``k=8``, as garment vertices carried by
+    a push are checked again) it reads the depth under the ball's nearest face plane, computed
+    here from the convex ball's face planes."""
+    from synmitsuba.body.binding import incident_faces
+    from synmitsuba.body.collide import Surface, incidence
+    x, z = np.meshgrid(np.linspace(-0.15, 0.15, 31), np.linspace(-0.15, 0.15, 31))
+    sheet = np.stack([x.ravel(), np.zeros(x.size), z.ravel()], 1)
+    g = np.arange(x.size).reshape(x.shape)
+    quads = np.stack([g[:-1, :-1], g[:-1, 1:], g[1:, 1:], g[1:, :-1]], -1).reshape(-1, 4)
+    sheet_faces = np.concatenate([quads[:, [0, 2, 1]], quads[:, [0, 3, 2]]])
+    assert (trimesh.Trimesh(sheet, sheet_faces, process=False).face_normals[:, 1] > 0.99).all()
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.05)
+    low = ball.triangles_center[:, 1].argmin()
+    bv = ball.vertices @ trimesh.geometry.align_vectors(ball.face_normals[low], [0, -1, 0])[:3, :3].T
+    bottom = bv[ball.faces[low]].mean(0)
+    bv = bv - bottom + [0, 0.004, 0]
+    v, f = np.concatenate([sheet, bv]), np.concatenate([sheet_faces, ball.faces + len(sheet)])
+    surface = Surface.of(v, f, incidence(f, len(v)), incident_faces(f, len(v)))
+    p = np.array([[0.005, 0.0075, 0.005]])
+    normals = trimesh.Trimesh(bv, ball.faces, process=False).face_normals
+    depth = -np.einsum("fi,fi->f", p - bv[ball.faces[:, 0]], normals).max()
+    assert (surface.tree.query(p, k=4)[1] < len(sheet)).all() and 0.003 < depth < 0.004
+    assert surface.clearance(p, 0.01)[0][0] > 0.005
+    assert abs(surface.clearance(p, 0.01, k=8)[0][0] + depth) < 1e-9
+
+
 def _tube(radius, rings: int = 41, segments: int = 32):
     """A vertical open tube, y in [0, 1], radius(y), outward-wound."""
     y, a = np.linspace(0, 1, rings), np.linspace(0, 2 * np.pi, segments, endpoint=False)
