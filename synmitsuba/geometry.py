@@ -101,6 +101,19 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return trimesh.geometry.mean_vertex_normals(len(v), faces, cross)
 
 
+def face_cross(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(F, 3) cross products of each triangle's two edges from its first corner: twice its area
+    along its normal. By components: np.cross on a (F, 3, 3) gather took half again as long."""
+    v = np.asarray(vertices, dtype=np.float64)
+    a = v[faces[:, 0]]
+    e1, e2 = v[faces[:, 1]] - a, v[faces[:, 2]] - a
+    cross = np.empty_like(e1)
+    cross[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
+    cross[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
+    cross[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    return cross
+
+
 class SmoothNormals:
     """Area-weighted unit vertex normals of a fixed triangulation, summed over the vertices
     ``weld`` maps to one index (``body.topology.weld``: the copies of a vertex along uv seams),
@@ -115,17 +128,13 @@ class SmoothNormals:
         own = sparse.csr_matrix((np.ones(3 * f), (self.faces.ravel(), np.repeat(np.arange(f), 3))), shape=(n, f))
         to_group = sparse.csr_matrix((np.ones(n), (weld, np.arange(n))), shape=(n, n))
         self.group = (to_group.T @ (to_group @ own)).tocsr()  # each vertex: its whole group's faces
-        cross = self._cross(rest)
+        cross = face_cross(rest, self.faces)
         self.alone = np.flatnonzero(np.linalg.norm(self.group @ cross, axis=1)
                                     <= 0.25 * np.linalg.norm(own @ cross, axis=1))
         self.own = own[self.alone]
 
-    def _cross(self, vertices: np.ndarray) -> np.ndarray:
-        t = np.asarray(vertices, dtype=np.float64)[self.faces]
-        return np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-
     def __call__(self, vertices: np.ndarray) -> np.ndarray:
-        cross = self._cross(vertices)
+        cross = face_cross(vertices, self.faces)
         n = self.group @ cross
         n[self.alone] = self.own @ cross
         return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
