@@ -121,22 +121,31 @@ class Surface:
     def _raise(self, height: np.ndarray, near: np.ndarray) -> np.ndarray:
         return height if self.lift is None else height - self.lift[near]
 
-    def clearance(self, points: np.ndarray, band: float, k: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    def clearance(self, points: np.ndarray, band: float, k: int = 4,
+                  under: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(height (N,), outward normal (N, 3)): the lowest over the tangent planes of the ``k``
         nearest vertices, made exact (closest point on the triangles around the nearest and
-        the lowest; around the 2 nearest where those are one) where it is under ``band``."""
-        _, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=k)
-        near = near.astype(np.int64)
-        h = self._raise(np.einsum("nka,nka->nk", points[:, None] - self.vertices[near], self.normals[near]), near)
+        the lowest; around the 2 nearest where those are one) where it is under ``band``.
+        ``under`` (N,) bool, when given, is set where a plane is under the point whatever
+        the exact test read: around two vertices it can miss the closest face."""
+        near, h = self.planes(points, k)
         low = h.argmin(1)
         rows = np.arange(len(points))
         height, normals = h[rows, low], self.normals[near[rows, low]]
+        if under is not None:
+            under |= height < 0
         look = np.flatnonzero(height < band)
         if len(look):
             around = np.stack([near[look, 0], near[look, np.where(low[look] == 0, 1, low[look])]], 1)
             height[look], normals[look] = self._exact(points[look], around)
             height[look] = self._raise(height[look], near[look, 0])
         return height, normals
+
+    def planes(self, points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The ``k`` nearest vertices (N, k) and the heights (N, k) over their tangent planes."""
+        _, near = self.tree.query(np.ascontiguousarray(points, dtype=np.float64), k=k)
+        near = near.astype(np.int64)
+        return near, self._raise(np.einsum("nka,nka->nk", points[:, None] - self.vertices[near], self.normals[near]), near)
 
     def _exact(self, points: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Signed distance to the closest point on the faces around ``near`` vertices and the
@@ -186,12 +195,13 @@ class GarmentCollider:
         in comes out."""
         out = points.copy()
         checks = [(lambda p: self._over_bound_point(p, body), self.margin),
-                  (lambda p: body.clearance(p, self.margin + EXACT_BAND), self.margin)]
+                  (lambda p: body.clearance(p, self.margin + EXACT_BAND, under=doubt), self.margin)]
         checks += [(lambda p, s=s: s.depth(p, REACH), LAYER_MARGIN) for s in inner]
         if calibrate:
             self.floors = []
         carried = np.zeros(len(out), bool)  # moved by something other than their own body clearance
         pushed = np.zeros(len(out), bool)   # moved at all by the body passes
+        doubt = np.zeros(len(out), bool)    # under a tangent plane of the body, whatever the exact test read
         for k, (check, margin) in enumerate(checks):
             height, normals = check(out)
             if calibrate:
@@ -206,7 +216,7 @@ class GarmentCollider:
                 carried |= moved > 0
         if carried.any():
             self._back_out(out, np.flatnonzero(carried), body)
-        self._settle(out, np.flatnonzero(pushed | carried), body)
+        self._settle(out, np.flatnonzero(pushed | carried | doubt), body)
         return out
 
     def _back_out(self, points: np.ndarray, carried: np.ndarray, body: Surface) -> None:
@@ -218,18 +228,18 @@ class GarmentCollider:
         points[carried] += push[:, None] * normals
 
     def _settle(self, points: np.ndarray, ids: np.ndarray, body: Surface) -> None:
-        """Vertices the pushes left inside the body, set ``SETTLE`` over the surface they are
-        in, again up to ``SETTLE_ROUNDS`` times: pushed by the margin out of one thigh, a vertex
-        of the crotch went into the other, and the tests around two vertices read some points
-        2-30 mm inside as outside. Inside is the closest point among the faces around the 8
-        nearest vertices, tested where the point is under one of their tangent planes (every
-        vertex found inside was 1.7 mm or more under one; a quarter of those pushed are)."""
+        """Vertices ``ids`` (moved, or under a tangent plane in pass 2) still inside the body,
+        set ``SETTLE`` over the surface they are in, again up to ``SETTLE_ROUNDS`` times:
+        pushed by the margin out of one thigh, a vertex of the crotch went into the other, and
+        the test around two vertices read some 2-30 mm inside as outside (it can miss the
+        closest face). Inside is the closest point among the faces around the 8 nearest
+        vertices (27 us a vertex), tested where the point is more than ``SETTLE`` under one of
+        their tangent planes (about one in ten of the vertices asked about)."""
         floor = np.minimum(self.floors[1], 0.0)  # inside at rest: left as built
         for _ in range(SETTLE_ROUNDS):
             if len(ids):
-                _, near = body.tree.query(points[ids], k=8)
-                near = near.astype(np.int64)
-                under = np.einsum("nka,nka->nk", points[ids, None] - body.vertices[near], body.normals[near]).min(1) < 0
+                near, h = body.planes(points[ids], 8)
+                under = h.min(1) < -SETTLE
                 ids, near = ids[under], near[under]
             if not len(ids):
                 return
