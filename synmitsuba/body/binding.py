@@ -48,8 +48,11 @@ def closest_on_faces(vertices, faces, points, cand) -> tuple[np.ndarray, np.ndar
     rigid move of the whole pose."""
     import trimesh
     cand = np.array(cand, copy=True)
-    for j in range(cand.shape[1] - 1, 0, -1):
-        cand[(cand[:, :j] == cand[:, j:j + 1]).any(1), j] = -1
+    order = np.argsort(cand, axis=1, kind="stable")  # a stable sort puts a face's first listing first
+    ranked = np.take_along_axis(cand, order, 1)
+    again = np.zeros(cand.shape, bool)
+    np.put_along_axis(again, order[:, 1:], ranked[:, 1:] == ranked[:, :-1], 1)
+    cand[again] = -1  # O(C log C) a point: comparing every pair of columns took a third of the call
     rows, cols = np.nonzero(cand >= 0)
     cp = trimesh.triangles.closest_point(vertices[faces[cand[rows, cols]]], points[rows])
     dist = np.full(cand.shape, np.inf)
