@@ -41,8 +41,8 @@ class Overlap:
 
     def near(self, points: np.ndarray, depth: np.ndarray, reach: float = 0.03) -> np.ndarray:
         """(N,) True where a body triangle within ``depth + reach`` of the point (``depth``: how
-        far inside it is) is buried: there no place is outside both parts, so no resolver can
-        clear the cloth; reported apart."""
+        far inside it is) is buried: there cloth can be inside both parts, where no push
+        along one part's normal clears it; reported apart."""
         from synmitsuba.geometry import winding_numbers
         if not len(points):
             return np.zeros(0, bool)
