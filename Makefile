@@ -61,7 +61,7 @@ bench: setup
 	$(PY) bench/render_quality.py   # PSNR/SSIM per second; make bench-cycles adds Blender Cycles
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
-	$(PY) bench/garment_collisions.py --subjects 20 --stride 1 --resolved-only   # the issue-12 figure: ~1 h
+	$(PY) bench/garment_collisions.py --subjects 20 --stride 1 --resolved-only   # the issue-12 figure: ~25 min
 	$(PY) bench/smplx_fit.py --subjects 10
 	$(PY) bench/subjects_robustness.py 200
 	$(PY) bench/compose_cost.py
