@@ -194,6 +194,7 @@ class GarmentCollider:
         pass's heights, so the rest pose is left exactly as built and only what motion pushed
         in comes out."""
         out = points.copy()
+        doubt = np.zeros(len(out), bool)  # under a tangent plane of the body, whatever the exact test read
         checks = [(lambda p: self._over_bound_point(p, body), self.margin),
                   (lambda p: body.clearance(p, self.margin + EXACT_BAND, under=doubt), self.margin)]
         checks += [(lambda p, s=s: s.depth(p, REACH), LAYER_MARGIN) for s in inner]
@@ -201,7 +202,6 @@ class GarmentCollider:
             self.floors = []
         carried = np.zeros(len(out), bool)  # moved by something other than their own body clearance
         pushed = np.zeros(len(out), bool)   # moved at all by the body passes
-        doubt = np.zeros(len(out), bool)    # under a tangent plane of the body, whatever the exact test read
         for k, (check, margin) in enumerate(checks):
             height, normals = check(out)
             if calibrate:
@@ -216,7 +216,7 @@ class GarmentCollider:
                 carried |= moved > 0
         if carried.any():
             self._back_out(out, np.flatnonzero(carried), body)
-        self._settle(out, np.flatnonzero(pushed | carried | doubt), body)
+        self._settle(out, np.flatnonzero(pushed | carried | doubt), body, calibrate)
         return out
 
     def _back_out(self, points: np.ndarray, carried: np.ndarray, body: Surface) -> None:
@@ -227,16 +227,18 @@ class GarmentCollider:
         push = np.clip(self.floors[1][carried] - height, 0.0, None)
         points[carried] += push[:, None] * normals
 
-    def _settle(self, points: np.ndarray, ids: np.ndarray, body: Surface) -> None:
+    def _settle(self, points: np.ndarray, ids: np.ndarray, body: Surface, calibrate: bool = False) -> None:
         """Vertices ``ids`` (moved, or under a tangent plane in pass 2) still inside the body,
         set ``SETTLE`` over the surface they are in, again up to ``SETTLE_ROUNDS`` times:
         pushed by the margin out of one thigh, a vertex of the crotch went into the other, and
         the test around two vertices read some 2-30 mm inside as outside (it can miss the
         closest face). Inside is the closest point among the faces around the 8 nearest
         vertices (27 us a vertex), tested where the point is more than ``SETTLE`` under one of
-        their tangent planes (about one in ten of the vertices asked about)."""
-        floor = np.minimum(self.floors[1], 0.0)  # inside at rest: left as built
-        for _ in range(SETTLE_ROUNDS):
+        their tangent planes (about one in ten of the vertices asked about). ``calibrate``
+        records the rest pose's readings instead: what was inside at rest stays as built."""
+        if calibrate:
+            self.lowest = np.minimum(self.floors[1], 0.0)
+        for _ in range(1 if calibrate else SETTLE_ROUNDS):
             if len(ids):
                 near, h = body.planes(points[ids], 8)
                 under = h.min(1) < -SETTLE
@@ -244,9 +246,12 @@ class GarmentCollider:
             if not len(ids):
                 return
             height, normals = body._exact(points[ids], near)
-            low = height < floor[ids]
+            if calibrate:
+                self.lowest[ids] = np.minimum(self.lowest[ids], height)
+                return
+            low = height < self.lowest[ids]
             ids, height, normals = ids[low], height[low], normals[low]
-            points[ids] += (floor[ids] + SETTLE - height)[:, None] * normals
+            points[ids] += (self.lowest[ids] + SETTLE - height)[:, None] * normals
 
     def _over_bound_point(self, points: np.ndarray, body: Surface) -> tuple[np.ndarray, np.ndarray]:
         """Heights over each vertex's own bound body point (posed) and the normal there."""
