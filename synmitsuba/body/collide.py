@@ -201,22 +201,26 @@ class GarmentCollider:
         if calibrate:
             self.floors = []
         carried = np.zeros(len(out), bool)  # moved by something other than their own body clearance
-        pushed = np.zeros(len(out), bool)   # moved at all by the body passes
+        pushed = np.zeros(len(out), bool)   # moved at all
         for k, (check, margin) in enumerate(checks):
             height, normals = check(out)
             if calibrate:
                 self.floors.append(np.minimum(margin, height))
                 continue
             own, moved = self._push(out, height, normals, self.floors[k])
-            if k < 2:
-                pushed |= moved > 0
+            pushed |= moved > 0
             if k == 1:
                 carried |= moved > own + CARRIED  # farther than it asked
             elif k > 1:
                 carried |= moved > 0
+        if calibrate:  # the settle step's rest readings: what was inside at rest stays as built
+            self.lowest = np.minimum(self.floors[1], 0.0)
+            ids, height, _ = self._under(out, np.flatnonzero(doubt), body)
+            self.lowest[ids] = np.minimum(self.lowest[ids], height)
+            return out
         if carried.any():
             self._back_out(out, np.flatnonzero(carried), body)
-        self._settle(out, np.flatnonzero(pushed | carried | doubt), body, calibrate)
+        self._settle(out, np.flatnonzero(pushed | doubt), body)
         return out
 
     def _back_out(self, points: np.ndarray, carried: np.ndarray, body: Surface) -> None:
@@ -227,31 +231,32 @@ class GarmentCollider:
         push = np.clip(self.floors[1][carried] - height, 0.0, None)
         points[carried] += push[:, None] * normals
 
-    def _settle(self, points: np.ndarray, ids: np.ndarray, body: Surface, calibrate: bool = False) -> None:
+    def _settle(self, points: np.ndarray, ids: np.ndarray, body: Surface) -> None:
         """Vertices ``ids`` (moved, or under a tangent plane in pass 2) still inside the body,
         set ``SETTLE`` over the surface they are in, again up to ``SETTLE_ROUNDS`` times:
         pushed by the margin out of one thigh, a vertex of the crotch went into the other, and
         the test around two vertices read some 2-30 mm inside as outside (it can miss the
-        closest face). Inside is the closest point among the faces around the 8 nearest
-        vertices (27 us a vertex), tested where the point is more than ``SETTLE`` under one of
-        their tangent planes (about one in ten of the vertices asked about). ``calibrate``
-        records the rest pose's readings instead: what was inside at rest stays as built."""
-        if calibrate:
-            self.lowest = np.minimum(self.floors[1], 0.0)
-        for _ in range(1 if calibrate else SETTLE_ROUNDS):
-            if len(ids):
-                near, h = body.planes(points[ids], 8)
-                under = h.min(1) < -SETTLE
-                ids, near = ids[under], near[under]
-            if not len(ids):
-                return
-            height, normals = body._exact(points[ids], near)
-            if calibrate:
-                self.lowest[ids] = np.minimum(self.lowest[ids], height)
-                return
+        closest face). Vertices inside at rest are only kept from going deeper (``lowest``)."""
+        for _ in range(SETTLE_ROUNDS):
+            ids, height, normals = self._under(points, ids, body)
             low = height < self.lowest[ids]
             ids, height, normals = ids[low], height[low], normals[low]
+            if not len(ids):
+                return
             points[ids] += (self.lowest[ids] + SETTLE - height)[:, None] * normals
+
+    @staticmethod
+    def _under(points: np.ndarray, ids: np.ndarray, body: Surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Of the vertices ``ids``, those more than ``SETTLE`` under a tangent plane of one of
+        their 8 nearest body vertices (about one in ten of those asked about), with their exact
+        height and normal: the closest point among the faces around all 8 (27 us a vertex)."""
+        if len(ids):
+            near, h = body.planes(points[ids], 8)
+            under = h.min(1) < -SETTLE
+            ids, near = ids[under], near[under]
+        if not len(ids):
+            return ids, np.zeros(0), np.zeros((0, 3))
+        return (ids, *body._exact(points[ids], near))
 
     def _over_bound_point(self, points: np.ndarray, body: Surface) -> tuple[np.ndarray, np.ndarray]:
         """Heights over each vertex's own bound body point (posed) and the normal there."""
