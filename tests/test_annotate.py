@@ -198,6 +198,10 @@ def test_bad_inputs_get_clear_answers(sm, walker, tmp_path):
     rec = Annotator([walker]).annotate(s, scene, 3)[0]
     assert (rec["visibility"] == 0).all() and not rec["valid"] and rec["bbox_keypoints"] is None
     assert rec["visible_fraction"] == 0.0 and not rec["amodal_mask"].any() and rec["layer_pixels"] == {}
+    with pytest.raises(sm.ConfigError, match=r"subject0_body at another pose.*pose_in\(scene, frame\)"):
+        Annotator([walker]).annotate(s, scene, 4)  # labels are cast in the scene: it must hold frame 4
+    with pytest.raises(sm.ConfigError, match="subject0_body missing"):
+        Annotator([walker]).annotate(s, sm.Scene(), 3)
     bare = sm.render(scene, sm.Camera.look_at(eye=(0.0, 1.0, 4.0), target=(0, 0.9, 0), width=32, height=24), spp=1)
     sm.write_sample(bare, tmp_path / "d" / "bare")  # rendered without annotation: no subjects
     assert sm.read_sample(tmp_path / "d" / "bare").subjects == []
@@ -226,3 +230,41 @@ def test_every_label_survives_the_files(sm, tmp_path):
         else:
             assert np.array_equal(np.asarray(a[k], dtype=object if a[k] is None else None),
                                   np.asarray(b[k], dtype=object if b[k] is None else None)), k
+
+
+def test_rays_pass_through_everything_but_the_shapes_asked_for(sm):
+    """``hits_through`` against distances worked out by hand: rays down -z from z = 5 pass a
+    sheet at z = 0 and a curtain of 400 strands (one ray meets every one of them) to the target
+    sheet at z = -2 (t = 7 exactly); a ``maxt`` short of it reads a miss; and rays in new
+    numbers and at new addresses run the one loop kernel compiled for the first call."""
+    import drjit as dr
+
+    from synmitsuba.engine.raycast import hits_through
+    quad = np.array([[0, 1, 2], [0, 2, 3]])
+    scene = sm.Scene()
+    for name, z, inst in (("front", 0.0, 1), ("target", -2.0, 3)):
+        scene.add_mesh(name, np.array([[-1, -1, z], [1, -1, z], [1, 1, z], [-1, 1, z]]), quad, instance=inst)
+    zs = np.linspace(-0.2, -1.8, 400)  # strands along x at y = 0, one every 4 mm of depth
+    strands = np.stack([np.stack([np.full(400, -1.0), np.zeros(400), zs], 1),
+                        np.stack([np.full(400, 1.0), np.zeros(400), zs], 1)], 1)
+    scene.add_curves("curtain", strands, 0.001, instance=2)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    kernels = []
+    try:
+        for n in (5, 17, 40, 41):
+            xy = np.column_stack([np.linspace(-0.5, 0.5, n), np.zeros(n)])  # y = 0: through every strand
+            o, d = np.column_stack([xy, np.full(n, 5.0)]), np.tile([0.0, 0.0, -1.0], (n, 1))
+            dr.kernel_history()  # reading clears it
+            hits = hits_through(scene, o, d, ["target"])
+            kernels.append({k["hash"] for k in dr.kernel_history()
+                            if k.get("type") == dr.KernelType.JIT and k["operation_count"] >= 50})
+            assert (hits["instance"] == 3).all() and np.allclose(hits["t"], 7.0, atol=1e-5)
+            assert [hits["names"][s] for s in set(hits["shape"])] == ["target"]
+            assert (hits["u"] >= 0).all() and (hits["u"] + hits["v"] <= 1).all()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert len(kernels[0]) == 1 and all(k == kernels[0] for k in kernels), kernels
+    short = hits_through(scene, o, d, ["target"], maxt=6.9)
+    assert (short["instance"] == 0).all() and np.isinf(short["t"]).all() and (short["shape"] == -1).all()
+    front = hits_through(scene, o, d, ["front", "target"])
+    assert (front["instance"] == 1).all() and np.allclose(front["t"], 5.0, atol=1e-5)

@@ -81,7 +81,7 @@ def test_animation_compiles_no_render_kernel_after_the_second_frame():
     give every frame new hashes. Frames 2-7 run one set of kernels. (They once came in two or
     three variants 6 operations apart: drjit read the hair's control points as one packet or
     as four floats depending on where numpy had put them; they now sit at 64-byte aligned
-    addresses, ``engine.build._aligned_floats``.) In a process of its own, where only this
+    addresses, ``engine.build.aligned_floats``.) In a process of its own, where only this
     scene's Mitsuba objects are alive (drjit traces virtual calls over every live instance).
     Tiny bookkeeping kernels (~20 operations) are not counted: they compile in microseconds,
     the render kernels in seconds."""

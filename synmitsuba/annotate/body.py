@@ -3,13 +3,14 @@ subjects' bodies alone give, where the pixel shows that subject (any of its laye
 part (``body.segments``: 24 parts), the body surface point (anny face index + 1 and
 barycentric weights of its vertices 1 and 2: a DensePose-like correspondence, the same
 topology for every subject), the body's z-depth and camera-frame normal, and the cloth
-thickness (body depth minus visible depth where a garment covers the body)."""
+thickness (body depth minus visible depth where a garment covers the body). The rays are cast
+in the rendered scene, passing through clothes and hair to the first body."""
 from __future__ import annotations
 
 import numpy as np
 
 from synmitsuba.body.segments import vertex_parts
-from synmitsuba.engine.raycast import surface_hits
+from synmitsuba.engine.raycast import far_side, hits_through
 from synmitsuba.geometry import vertex_normals
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.layers import Layer
@@ -19,45 +20,43 @@ GARMENT_LAYERS = (int(Layer.TOP), int(Layer.BOTTOM), int(Layer.DRESS), int(Layer
 
 
 class BodyLayer:
-    """The subjects' bodies in a scene of their own, posed once per frame."""
+    """The subjects' posed bodies, seen through their clothes and hair in the scene they are
+    rendered in (the body meshes there are the ones posed here)."""
 
     def __init__(self, subjects: list):
         self.subjects = subjects
-        self.scene = Scene()
         self.faces = [p.human.parts[0].faces.astype(np.int64) for p in subjects]
         self.face_parts = [vertex_parts(p.human.parts[0].weights, p.human.skeleton.names)[f[:, 0]] + 1
                            for p, f in zip(subjects, self.faces)]
+        self.bodies: list = []
         self.normals: list = []
 
     def pose(self, bodies: list) -> None:
-        """Move the bodies to posed vertices (one (V, 3) array per subject)."""
-        for k, (p, v) in enumerate(zip(self.subjects, bodies)):
-            name = f"{p.prefix}_body"
-            if name in self.scene.meshes:
-                self.scene.update_mesh(name, v)
-            else:
-                self.scene.add_mesh(name, v, self.faces[k], instance=p.instance)
+        """The bodies' posed vertices (one (V, 3) array per subject)."""
+        self.bodies = bodies
         self.normals = [vertex_normals(v, f) for v, f in zip(bodies, self.faces)]
 
-    def passes(self, cam: Camera, instance: np.ndarray, depth: np.ndarray, layer: np.ndarray) -> dict:
-        """The body passes of one view (H, W arrays; see the module docstring)."""
+    def passes(self, cam: Camera, scene: Scene, instance: np.ndarray, depth: np.ndarray, layer: np.ndarray) -> dict:
+        """The body passes of one view (H, W arrays; see the module docstring), from rays cast
+        only where a subject shows, through anything not a body (``hits_through``)."""
         H, W = cam.height, cam.width
         d = cam.pixel_rays().reshape(-1, 3)
-        hits = surface_hits(self.scene, cam.center, d)
-        inst = hits["instance"]
-        own = (inst > 0) & (inst == instance.reshape(-1))  # the pixel shows this body's subject
+        by_name = {f"{p.prefix}_body": k for k, p in enumerate(self.subjects)}
+        shown = np.flatnonzero(np.isin(instance.reshape(-1), [p.instance for p in self.subjects]))
+        far = max((far_side(b, cam.center) for b in self.bodies), default=0.0)
+        hits = hits_through(scene, cam.center, d[shown], by_name, far)
+        own = (hits["instance"] > 0) & (hits["instance"] == instance.reshape(-1)[shown])  # this body's subject shows
         out = {"body_part": np.zeros(H * W, np.uint8), "body_face": np.zeros(H * W, np.int32),
                "body_bary": np.zeros((H * W, 2), np.float32), "body_depth": np.zeros(H * W, np.float32),
                "body_normal": np.zeros((H * W, 3), np.float32)}
-        by_name = {f"{p.prefix}_body": k for k, p in enumerate(self.subjects)}
         for idx in np.unique(hits["shape"][own]):
             k = by_name[hits["names"][idx]]
-            sel = np.flatnonzero(own & (hits["shape"] == idx))
-            face, u, v = hits["prim"][sel], hits["u"][sel], hits["v"][sel]
+            m = own & (hits["shape"] == idx)
+            sel, face, u, v = shown[m], hits["prim"][m], hits["u"][m], hits["v"][m]
             out["body_part"][sel] = self.face_parts[k][face]
             out["body_face"][sel] = face + 1
             out["body_bary"][sel] = np.stack([u, v], 1)
-            out["body_depth"][sel] = hits["t"][sel] * (d[sel] @ cam.R[2])
+            out["body_depth"][sel] = hits["t"][m] * (d[sel] @ cam.R[2])
             n = self.normals[k][self.faces[k][face]]
             n = (1 - u - v)[:, None] * n[:, 0] + u[:, None] * n[:, 1] + v[:, None] * n[:, 2]
             n = n @ cam.R.T

@@ -20,8 +20,9 @@ import numpy as np
 from synmitsuba.annotate.body import BodyLayer
 from synmitsuba.annotate.bodyparams import body_params_in_camera
 from synmitsuba.annotate.keypoints import keypoint_visibility
-from synmitsuba.engine.raycast import cast
-from synmitsuba.geometry import matrix_to_axis_angle
+from synmitsuba.engine.raycast import far_side, hits_through
+from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import bounds, matrix_to_axis_angle
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
 
@@ -64,26 +65,29 @@ def body_model_params(fits: dict, frame: int, camera: Camera) -> dict:
 
 
 class Annotator:
-    """Labels for placed subjects (``compose.subjects.PlacedSubject``); keeps one scene per
-    subject (its layers alone) for the amodal masks, moved in place frame by frame."""
+    """Labels for placed subjects (``compose.subjects.PlacedSubject``), cast in the scene they
+    are rendered in: amodal masks see one subject through everything else, body passes see the
+    bodies through clothes and hair (``engine.raycast.hits_through``)."""
 
     def __init__(self, subjects: list):
         self.subjects = subjects
-        self._alone = [Scene() for _ in subjects]
         self._frame: int | None = None
         self.bodies = BodyLayer(subjects)
         self._posed: list = []  # per subject at self._frame: (keypoints, body vertices, joints)
+        self._points: list = []  # per subject at self._frame: every layer's vertices and strand points
 
     def _pose(self, frame: int) -> None:
-        """Pose every subject's own scene and its labels' geometry once per frame (not per view)."""
+        """Every subject's labels' geometry, once per frame (not per view)."""
         if frame == self._frame:
             return
-        self._posed = []
-        for i, p in enumerate(self.subjects):
+        self._posed, self._points = [], []
+        for p in self.subjects:
             rot, root = p.motion.frame(frame % p.motion.n_frames)
-            p.human.add_to(self._alone[i], rot, root, instance=p.instance, prefix=p.prefix)
-            body = self._alone[i].meshes[f"{p.prefix}_body"].vertices
+            layers = p.human.pose(rot, root)  # the arrays pose_in put in the scene (posing is cached)
+            body = next(layer.vertices for layer in layers if layer.name == "body")
             self._posed.append((p.human.keypoints(rot, root), body, _joints(p.human.skeleton, rot, root)))
+            self._points.append(np.concatenate([layer.points.reshape(-1, 3) if layer.is_curves else layer.vertices
+                                                for layer in layers]))
         self.bodies.pose([b for _, b, _ in self._posed])
         self._frame = frame
 
@@ -95,10 +99,11 @@ class Annotator:
         rays = cam.pixel_rays().reshape(-1, 3)
         instances = {p.instance for p in self.subjects}
         self._pose(int(frame))
+        self._check_posed(scene, int(frame))
         records = []
         for i, p in enumerate(self.subjects):
             rot, root = p.motion.frame(int(frame) % p.motion.n_frames)
-            amodal = self._amodal(i, p.instance, cam, rays)
+            amodal = self._amodal(i, p.instance, cam, rays, scene)
             rec = self._record(p, rot, root, cam, scene, instances, amodal, sample.passes["instance"] == p.instance,
                                *self._posed[i])
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
@@ -106,27 +111,38 @@ class Annotator:
             rec.update(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))
             records.append(rec)
         sample.subjects = records
-        sample.passes.update(self.bodies.passes(cam, sample.passes["instance"], sample.passes["depth"],
+        sample.passes.update(self.bodies.passes(cam, scene, sample.passes["instance"], sample.passes["depth"],
                                                 sample.passes["layer"]))
         return records
 
-    def _amodal(self, i: int, instance: int, cam: Camera, rays: np.ndarray) -> np.ndarray:
+    def _check_posed(self, scene: Scene, frame: int) -> None:
+        """The masks are cast in ``scene``: every subject must stand there as posed at ``frame``."""
+        for p, (_, body, _) in zip(self.subjects, self._posed):
+            mesh = scene.meshes.get(f"{p.prefix}_body")
+            if mesh is None or not np.array_equal(mesh.vertices, body):
+                raise ConfigError("scene", f"{p.prefix}_body " + ("missing" if mesh is None else "at another pose"),
+                                  f"pose every subject in the scene at frame {frame} first "
+                                  "(PlacedSubject.pose_in(scene, frame)): its labels are cast there")
+
+    def _amodal(self, i: int, instance: int, cam: Camera, rays: np.ndarray, scene: Scene) -> np.ndarray:
         """The subject alone through pixel-centre rays, cast only inside the image box its
-        geometry projects to (the whole image when part of it is behind the camera)."""
-        alone = self._alone[i]
-        pts = np.concatenate([m.vertices for m in alone.meshes.values()] +
-                             [c.points.reshape(-1, 3) for c in alone.curves.values()])
+        geometry projects to (the whole image when part of it is behind the camera), through
+        whatever stands in front of it."""
+        pts = self._points[i]
         uv, z = cam.project(pts)
         mask = np.zeros((cam.height, cam.width), bool)
         x0, y0, x1, y1 = 0, 0, cam.width, cam.height
         if (z > 1e-6).all():
-            lo, hi = np.floor(uv.min(0)).astype(int) - 2, np.ceil(uv.max(0)).astype(int) + 2
+            lo, hi = bounds(uv)
+            lo, hi = np.floor(lo).astype(int) - 2, np.ceil(hi).astype(int) + 2
             x0, y0 = max(lo[0], 0), max(lo[1], 0)
             x1, y1 = min(hi[0], cam.width), min(hi[1], cam.height)
             if x0 >= x1 or y0 >= y1:
                 return mask
         grid = rays.reshape(cam.height, cam.width, 3)[y0:y1, x0:x1].reshape(-1, 3)
-        mask[y0:y1, x0:x1] = (cast(alone, cam.center, grid)[0] == instance).reshape(y1 - y0, x1 - x0)
+        own = [n for shapes in (scene.meshes, scene.curves) for n, sh in shapes.items() if sh.instance == instance]
+        hits = hits_through(scene, cam.center, grid, own, far_side(pts, cam.center))
+        mask[y0:y1, x0:x1] = (hits["instance"] == instance).reshape(y1 - y0, x1 - x0)
         return mask
 
     def _record(self, p, rot, root, cam: Camera, scene, instances, amodal, visible, kp, body, joints) -> dict:

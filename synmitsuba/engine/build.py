@@ -89,12 +89,12 @@ def _curves(shape: CurveShape):
                                "bsdf": bsdf_dict(shape.material)})
     params = mi.traverse(curves)
     rows = np.concatenate([shape.points, shape.radius[..., None]], -1).astype(np.float32)
-    params["control_points"] = _aligned_floats(rows)
+    params["control_points"] = aligned_floats(rows)
     params.update()
     return curves
 
 
-def _aligned_floats(arr: np.ndarray, align: int = 64):
+def aligned_floats(arr: np.ndarray, align: int = 64):
     """``mi.Float`` of ``arr``'s values from a buffer at an address divisible by ``align``.
     drjit maps a numpy array without copying, and reads control points (x, y, z, r) as one
     packet only when their address allows it: from numpy's own allocations (16-byte aligned at
@@ -266,7 +266,7 @@ def _update_in_place(cached: BuiltScene, scene: Scene) -> None:
     for name, c in scene.curves.items():
         if cached._pushed.get(name) is not c.points or cached._pushed.get(f"{name}.radius") is not c.radius:
             rows = np.concatenate([c.points, c.radius[..., None]], -1).astype(np.float32)
-            cached.moving[f"{name}.control_points"] = _aligned_floats(rows)
+            cached.moving[f"{name}.control_points"] = aligned_floats(rows)
             cached._pushed[name], cached._pushed[f"{name}.radius"] = c.points, c.radius
     cached.moving.update()
     normals = [(name, m.normals) for name, m in scene.meshes.items()
