@@ -150,23 +150,26 @@ class _GeometryCache:
 
 
 class _Neighbours:
-    """Plain copies of the scene held at frames f - 1 and f + 1 for flow's visibility tests:
-    each moves once per frame, whatever the number of views."""
+    """Plain copies of the scene held at neighbouring frames for flow's visibility tests. Three
+    of them, each kept at its frame while it is still of use: frame f asks for f + 1 and
+    f - 1, and f - 1 is the copy moved to it for frame f - 1's forward flow, so one copy moves
+    a frame (two did with a copy for each side: each move is a BVH rebuilt, 30-70 ms with hair)."""
 
     def __init__(self, scene, placed):
-        self.placed, self.scene, self.copies, self.at = placed, scene, {}, {}
+        self.placed, self.scene, self.copies, self.at = placed, scene, [], []
 
     def __call__(self, g: int, f: int):
-        key = "next" if g > f else "previous"
-        if not self.copies:  # both at once: every load happens on the first frame
-            self.copies = {k: geometry_copy(self.scene) for k in ("next", "previous")}
-            for copy in self.copies.values():
+        if not self.copies:  # all at once: every load happens on the first frame
+            self.copies = [geometry_copy(self.scene) for _ in range(3)]
+            for copy in self.copies:
                 build(copy)
-        if self.at.get(key) != g:
+            self.at = [None] * 3
+        if g not in self.at:  # move the copy whose frame lies farthest from f (or none yet)
+            k = max(range(3), key=lambda k: np.inf if self.at[k] is None else abs(self.at[k] - f))
             for p in self.placed:
-                p.pose_in(self.copies[key], g)
-            self.at[key] = g
-        return self.copies[key]
+                p.pose_in(self.copies[k], g)
+            self.at[k] = g
+        return self.copies[self.at.index(g)]
 
 
 def _add_flow(sample, scene, placed, view, f: int, n_frames: int, geometry, neighbours) -> None:
