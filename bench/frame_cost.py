@@ -11,6 +11,7 @@ size, spp and sampler. Also the resident memory after each frame. Prints JSON.
 import argparse
 import json
 import os
+import resource
 import statistics
 import sys
 import tempfile
@@ -117,6 +118,7 @@ def main(argv=None) -> dict:
               "rss_growth_after_second_frame": round(rss[-1] / rss[min(1, len(rss) - 1)] - 1, 4),
               "rss_growth_after_first_frame": round(rss[-1] / rss[0] - 1, 4), "goal_rss_growth": 0.05,
               "rss_mb_every_10_frames": [round(r) for r in rss[::10]],
+              "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
               "subjects": len(subjects)}
     print(json.dumps(result, indent=1))
     return result
