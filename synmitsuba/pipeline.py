@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.annotate.flow import exact_flow, geometry_copy, subjects_geometry
+from synmitsuba.annotate.flow import exact_flow, geometry_copy, pixel_hits, subjects_geometry
 from synmitsuba.annotate.records import Annotator
 from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
@@ -173,8 +173,11 @@ class _Neighbours:
 
 
 def _add_flow(sample, scene, placed, view, f: int, n_frames: int, geometry, neighbours) -> None:
-    """Exact forward (to f + 1) and backward (to f - 1) flow where those frames exist."""
+    """Exact forward (to f + 1) and backward (to f - 1) flow where those frames exist, from one
+    cast of the view's pixel-centre rays."""
+    hits = pixel_hits(scene, view.cameras[f])
     for name, g in (("flow_fwd", f + 1), ("flow_bwd", f - 1)):
         if 0 <= g < n_frames:
-            flow, flags = exact_flow(scene, view.cameras[f], view.cameras[g], geometry(f), geometry(g), neighbours(g, f))
+            flow, flags = exact_flow(scene, view.cameras[f], view.cameras[g], geometry(f), geometry(g), neighbours(g, f),
+                                     hits)
             sample.passes[name], sample.passes[f"{name}_flag"] = flow, flags

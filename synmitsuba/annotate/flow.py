@@ -58,15 +58,23 @@ def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Ge
     return out
 
 
+def pixel_hits(scene: Scene, cam: Camera) -> dict:
+    """``surface_hits`` of ``cam``'s pixel-centre rays, with the rays (``"rays"``): what
+    ``exact_flow`` starts from, shared by a view's forward and backward flow."""
+    d = cam.pixel_rays().reshape(-1, 3)
+    return {**surface_hits(scene, cam.center, d), "rays": d}
+
+
 def exact_flow(scene: Scene, cam: Camera, cam_other: Camera, now: Geometry, then: Geometry,
-               scene_then: Scene | None = None) -> tuple[np.ndarray, np.ndarray]:
+               scene_then: Scene | None = None, hits: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Flow (H, W, 2) in pixels from ``cam``'s frame to ``cam_other``'s and the flags (H, W).
     ``scene`` holds the geometry of ``cam``'s frame; ``now`` / ``then`` give the moving shapes at
     both frames. The visibility test at the other frame runs on ``scene_then`` (a scene already
-    at that frame, see ``geometry_copy``) or else on ``scene`` moved there and back."""
+    at that frame, see ``geometry_copy``) or else on ``scene`` moved there and back. ``hits``:
+    ``pixel_hits(scene, cam)``, when already cast."""
     H, W = cam.height, cam.width
-    d = cam.pixel_rays().reshape(-1, 3)
-    hits = surface_hits(scene, cam.center, d)
+    hits = pixel_hits(scene, cam) if hits is None else hits
+    d = hits["rays"]
     P = _points_at(scene, hits, cam.center, d, now, then)
     ok = np.isfinite(P[:, 0])
     uv, z = cam_other.project(np.where(ok[:, None], P, 0.0))
