@@ -52,15 +52,20 @@ def surface_hits(scene: Scene, origins, directions, maxt=None) -> dict:
     ``shape`` (an index into ``names``, -1 where nothing is hit), ``names`` (the scene's shape
     names), ``prim`` (triangle or curve segment index), ``u``, ``v`` (Mitsuba's ``prim_uv``:
     barycentric weights of vertices 1 and 2 on a triangle) and ``t`` (inf where nothing is hit)."""
-    import drjit as dr
     built, si, hit, reg = _intersect(scene, origins, directions, maxt, coherent=True)
-    shape = built.lookup("shape", reg, hit).numpy().astype(np.int64) - 1
-    return {"instance": built.lookup("instance", reg, hit).numpy().astype(np.int64), "shape": shape,
-            "names": list(built.names),
-            "prim": np.asarray(dr.select(hit, si.prim_index, 0).numpy(), np.int64),
-            "u": np.asarray(dr.select(hit, si.prim_uv.x, 0.0).numpy(), np.float64),  # garbage (NaN) on misses
-            "v": np.asarray(dr.select(hit, si.prim_uv.y, 0.0).numpy(), np.float64),
-            "t": np.asarray(dr.select(hit, si.t, dr.inf).numpy(), np.float64)}
+    return _hit_arrays(built, hit, reg, si.prim_index, si.prim_uv.x, si.prim_uv.y, si.t)
+
+
+def _hit_arrays(built, hit, reg, prim, u, v, t) -> dict:
+    """``surface_hits``' dict from per-ray drjit values: the registry ids ``reg`` read through
+    the scene's tables, misses (``hit`` false) as instance 0, shape -1, zeros and t = inf."""
+    import drjit as dr
+    return {"instance": built.lookup("instance", reg, hit).numpy().astype(np.int64),
+            "shape": built.lookup("shape", reg, hit).numpy().astype(np.int64) - 1, "names": list(built.names),
+            "prim": np.asarray(dr.select(hit, prim, 0).numpy(), np.int64),
+            "u": np.asarray(dr.select(hit, u, 0.0).numpy(), np.float64),  # garbage (NaN) on misses
+            "v": np.asarray(dr.select(hit, v, 0.0).numpy(), np.float64),
+            "t": np.asarray(dr.select(hit, t, dr.inf).numpy(), np.float64)}
 
 
 STEP = 1e-4  # metres a ray restarts past what it passed through: beyond float32's error at tens of metres
@@ -84,7 +89,8 @@ def hits_through(scene: Scene, origins, directions, onto, maxt=None, rounds: int
     if not len(d):
         return {"instance": np.zeros(0, np.int64), "shape": np.zeros(0, np.int64), "names": list(built.names),
                 "prim": np.zeros(0, np.int64), "u": np.zeros(0), "v": np.zeros(0), "t": np.zeros(0)}
-    wanted = np.array([False] + [n in set(onto) for n in built.names])[built.tables["shape"]]  # by registry id
+    onto = set(onto)
+    wanted = np.array([False] + [n in onto for n in built.names])[built.tables["shape"]]  # by registry id
     table = mi.UInt32(wanted.astype(np.uint32))
     origin = mi.Point3f(*(aligned_floats(o[:, k]) for k in range(3)))  # one kernel at any address
     direction = mi.Vector3f(*(aligned_floats(d[:, k]) for k in range(3)))
@@ -108,12 +114,7 @@ def hits_through(scene: Scene, origins, directions, onto, maxt=None, rounds: int
              dr.zeros(mi.UInt32, n), dr.zeros(mi.Float, n), dr.zeros(mi.Float, n), dr.zeros(mi.Float, n))
     _, _, _, found, reg, prim, u, v, t = dr.while_loop(state, cond, body)
     dr.eval(found, reg, prim, u, v, t)  # one kernel: read one by one, each would run the loop again
-    found = found.numpy().astype(bool)
-    reg = np.where(found, reg.numpy(), 0)
-    return {"instance": np.where(found, built.tables["instance"][reg], 0).astype(np.int64),
-            "shape": np.where(found, built.tables["shape"][reg].astype(np.int64) - 1, -1), "names": list(built.names),
-            "prim": np.where(found, prim.numpy(), 0).astype(np.int64), "u": np.where(found, u.numpy(), 0.0).astype(np.float64),
-            "v": np.where(found, v.numpy(), 0.0).astype(np.float64), "t": np.where(found, t.numpy(), np.inf).astype(np.float64)}
+    return _hit_arrays(built, found, reg, prim, u, v, t)
 
 
 def far_side(points, eye, margin: float = 0.01) -> float:
