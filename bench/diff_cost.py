@@ -37,7 +37,7 @@ def main(argv=None) -> int:
     import mitsuba as mi
     import synmitsuba as sm
     from synmitsuba.engine.variant import current_variant
-    from synmitsuba.render import sensor as sensor_mod
+    from synmitsuba.rendering import sensor as sensor_mod
     sm.set_variant()
     recipe, human = cached(args.subjects, build_subject)
     shirt = next(g for g in recipe.garments if g.kind == "tshirt")

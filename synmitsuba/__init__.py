@@ -34,7 +34,7 @@ _FROM = {
     "synmitsuba.diff": ("DiffScene", "fit_texture", "FitResult"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}
-_EXPORTS["render"] = "synmitsuba.render:"  # the package itself, callable as the render function
+_EXPORTS["render"] = "synmitsuba.rendering.passes:render"  # a plain function (the package is synmitsuba.rendering)
 _EXPORTS["metrics"] = "synmitsuba.metrics:"
 _EXPORTS["diff"] = "synmitsuba.diff:"
 _EXPORTS["SampleDataset"] = "synmitsuba.data.dataset:SynDataset"  # the earlier name of the one dataset class

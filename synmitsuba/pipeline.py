@@ -27,7 +27,7 @@ from synmitsuba.compose.subjects import add_subjects
 from synmitsuba.engine.build import build, settle_frame_memory
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.exr import write_sample
-from synmitsuba.render.passes import render
+from synmitsuba.rendering.passes import render
 from synmitsuba.schema import POSITIVE, Number, Params, Text, optional, spec
 
 

@@ -3,7 +3,7 @@ registry that declares, once, every pass's in-memory type and its OpenEXR channe
 
 The renderer fills a Sample, the writers and readers in ``synmitsuba.io`` consume it; neither
 knows the other. A new pass is one ``register_pass`` entry here plus its computation in the
-renderer (``synmitsuba.render.passes.exact_pass``); the EXR writer, the reader and the
+renderer (``synmitsuba.rendering.passes.exact_pass``); the EXR writer, the reader and the
 dataset pick it up from this table.
 """
 from __future__ import annotations

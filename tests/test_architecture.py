@@ -20,14 +20,64 @@ def test_import_loads_neither_mitsuba_nor_torch():
     assert out.strip() == "[]"
 
 
-def test_render_is_both_the_function_and_the_package(sm):
-    import synmitsuba.render.passes as passes
-    assert sm.render.passes is passes and callable(sm.render)
-    assert sm.render.exact_pass is passes.exact_pass
+def test_render_is_a_plain_function_with_a_real_signature(sm):
+    import inspect
+    import types
+
+    import synmitsuba.rendering.passes as passes
+    assert sm.render is passes.render and isinstance(sm.render, types.FunctionType)
+    params = inspect.signature(sm.render).parameters
+    assert list(params)[:4] == ["scene", "camera", "spp", "seed"] and params["spp"].default == 16
+
+
+def _sky_box(sm):
+    scene = sm.Scene()
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    scene.add_mesh("box", box.vertices, box.faces, material=sm.Material(base_color=(0.5, 0.5, 0.5)), instance=1)
+    scene.set_environment(sm.SunSky(sun_direction=(0.3, 1.0, 0.2)))
+    return scene, sm.Camera.look_at(eye=(0, 1, 4), target=(0, 0, 0), fov_y_deg=50, width=24, height=16)
+
+
+def test_diffscene_after_a_render_and_render_after_diffscene(sm):
+    """The engine keeps its builds off the Scene: a DiffScene of a rendered scene (soft sun:
+    a copy with another environment) loads, and driving its variables never changes what a
+    plain render of the user's unchanged scene returns."""
+    scene, cam = _sky_box(sm)
+    before = sm.render(scene, cam, spp=4, seed=1).rgb
+    ds = sm.DiffScene(scene, soft_sun_deg=2)  # KeyError 'environment.data' when the build rode on the copy
+    ds.set("environment.sun_scale", 0.0)
+    ds.set("environment.sky_scale", 0.0)
+    ds.apply()
+    assert float(np.array(ds.render(cam, spp=2)).mean()) == 0.0
+    assert np.array_equal(sm.render(scene, cam, spp=4, seed=1).rgb, before)
+    scene.set_environment(sm.Constant(0.8))
+    plain = sm.render(scene, cam, spp=4, seed=1).rgb
+    ds2 = sm.DiffScene(scene)
+    ds2.set("environment.radiance", 0.0)
+    ds2.apply()
+    assert float(np.array(ds2.render(cam, spp=2)).mean()) == 0.0
+    again = sm.render(scene, cam, spp=4, seed=1).rgb
+    assert again.mean() > 0.5 and np.array_equal(again, plain)
+
+
+def test_scene_changes_bump_its_version_and_copies_carry_no_build(sm):
+    import copy
+
+    from synmitsuba.engine.build import cached_build
+    scene, cam = _sky_box(sm)
+    sm.render(scene, cam, spp=1)
+    v = scene.structure_version
+    scene.environment = sm.Constant(0.0)  # direct assignment counts as a change
+    assert scene.structure_version == v + 1
+    assert sm.render(scene, cam, spp=1).rgb.max() == 0.0
+    dup = copy.copy(scene)
+    assert cached_build(dup) is None and cached_build(scene) is not None
+    dup.add_mesh("extra", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    assert "extra" not in scene.meshes
 
 
 def test_a_new_pass_is_one_declaration_plus_its_computation(sm, tmp_path):
-    from synmitsuba.render.passes import EXACT_PASSES, exact_pass
+    from synmitsuba.rendering.passes import EXACT_PASSES, exact_pass
     from synmitsuba.sample import PASSES, register_pass
     register_pass("ray_t", ("ray.T",), "float32", doc="distance along the pixel-centre ray")
 

@@ -94,7 +94,7 @@ def test_emitters_are_sampled_by_their_light(sm, monkeypatch):
     import synmitsuba.engine.build as build
     scene, rgb, expected = sky_and_sun(sm, 64)
     assert rgb.mean() == pytest.approx(expected, rel=5e-3)
-    params = scene._built.params
+    params = build.cached_build(scene).params
     assert (params["environment.sampling_weight"], params["light_0.sampling_weight"]) == (1.0, 3.0)
     weighted = sky_and_sun(sm, 4)[1].std()
     monkeypatch.setattr(build, "_weigh_emitters", lambda *args, **kw: None)  # Mitsuba's default

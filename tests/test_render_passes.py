@@ -3,6 +3,8 @@ import numpy as np
 import pytest
 import trimesh
 
+from synmitsuba.engine.build import cached_build
+
 
 def plane(sm, scene, point, normal, size=40.0, instance=1, layer=9):
     """A large square through ``point`` with unit ``normal``."""
@@ -167,10 +169,10 @@ def test_update_mesh_moves_geometry_without_rebuilding(sm):
     scene.add_mesh("box", box.vertices, box.faces, instance=1)
     cam = sm.Camera.look_at(eye=(0, 0, 3), target=(0, 0, 0), width=16, height=16)
     s1 = sm.render(scene, cam, spp=1)
-    built = scene._built
+    built = cached_build(scene)
     scene.update_mesh("box", box.vertices + [0, 0, -1.0])
     s2 = sm.render(scene, cam, spp=1)
-    assert scene._built is built
+    assert cached_build(scene) is built
     assert s1.depth[8, 8] == pytest.approx(2.95, abs=1e-5)
     assert s2.depth[8, 8] == pytest.approx(3.95, abs=1e-5)
 
@@ -259,7 +261,7 @@ def test_coverage_cast_at_edges_equals_coverage_cast_everywhere(sm):
     instance; on straight and gently curved edges that is every fractional pixel, so the result
     equals casting at every pixel (the same rays per pixel), at a fraction of the rays."""
     from synmitsuba.engine.build import build
-    from synmitsuba.render.passes import coverage, edge_pixels, exact_passes
+    from synmitsuba.rendering.passes import coverage, edge_pixels, exact_passes
     scene = sm.Scene()
     for k, inst in enumerate((3, 8)):
         box = trimesh.creation.box((0.6, 0.6, 0.1))

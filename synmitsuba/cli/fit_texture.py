@@ -25,7 +25,7 @@ def _make_targets(args, recipe) -> int:
     """Render ``--make-targets`` views of the recipe's subject into TARGETS (for a round trip)."""
     from synmitsuba.diff.recipe import rest_scene
     from synmitsuba.io.exr import write_sample
-    from synmitsuba.render.passes import render
+    from synmitsuba.rendering.passes import render
     output_dir(args.targets, "TARGETS")
     scene = rest_scene(recipe, args.radiance)
     for i, cam in enumerate(_ring(args.make_targets, args.size)):
@@ -77,7 +77,7 @@ def run(args) -> int:
               "seconds_per_step": result.seconds_per_step, "targets": [os.path.basename(s) for s in stems]}
     _write(os.path.join(out, "fit.json"), json.dumps(report, indent=1))
     _write(os.path.join(out, "recipe.json"), fitted_recipe(recipe, result.values).to_json())
-    from synmitsuba.render.passes import render
+    from synmitsuba.rendering.passes import render
     fitted_img = render(ds.scene, samples[0].camera, spp=args.target_spp, seed=7).rgb
     write_png(os.path.join(out, "compare.png"), to_srgb8(np.concatenate([samples[0].rgb, fitted_img], 1)))
     print(f"loss {result.losses[0]:.5f} -> {result.losses[-1]:.5f}; wrote fit.json, recipe.json, compare.png in {out}")

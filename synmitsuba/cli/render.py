@@ -11,7 +11,7 @@ def run(args) -> int:
 
     from synmitsuba.compose.scenefile import read_scene_doc, scene_from_doc
     from synmitsuba.io.exr import write_sample
-    from synmitsuba.render.passes import render
+    from synmitsuba.rendering.passes import render
     from synmitsuba.engine.variant import set_variant
     doc = read_scene_doc(args.scene)  # every key checked before anything is built
     output_dir(args.out)

@@ -46,7 +46,7 @@ class DiffScene:
 
     def __init__(self, scene: Scene, integrator: str = "prb", max_depth: int = 4, soft_sun_deg: float | None = None):
         import mitsuba as mi
-        from synmitsuba.engine.build import build
+        from synmitsuba.engine.build import load
         from synmitsuba.engine.variant import current_variant, set_variant
         if not isinstance(scene, Scene):
             raise ConfigError("scene", type(scene).__name__, "give a synmitsuba.Scene")
@@ -59,9 +59,9 @@ class DiffScene:
         self.sun = None if soft_sun_deg is None else SoftSun(scene.environment, soft_sun_deg)
         if self.sun is not None:  # the same scene under the baked sky (the user's scene is left as it is)
             scene = copy.copy(scene)
-            scene.environment = EnvMap(self.sun.image())
+            scene.set_environment(EnvMap(self.sun.image()))
         self.scene = scene
-        self.built = build(scene)
+        self.built = load(scene)  # its own build: apply() never changes what sm.render(scene) sees
         self.params = self.built.params
         self.integrator = mi.load_dict({"type": integrator, "max_depth": max_depth})
         self.variables: dict = {}    # name -> drjit value
@@ -164,7 +164,7 @@ class DiffScene:
         gradients are enabled (``dr.enable_grad(ds.variables[name])``). The gradient pass traces
         its own paths (seed ``seed + 1``), so a loss's gradient is unbiased."""
         import mitsuba as mi
-        from synmitsuba.render import sensor as sensor_mod
+        from synmitsuba.rendering import sensor as sensor_mod
         from synmitsuba.engine.variant import current_variant
         if not isinstance(camera, Camera):
             raise ConfigError("camera", type(camera).__name__, "give a synmitsuba.Camera")

@@ -1,9 +1,16 @@
-"""Turn a ``synmitsuba.Scene`` into a Mitsuba scene, cached on the scene and updated in place."""
+"""Turn a ``synmitsuba.Scene`` into a Mitsuba scene, updated in place as the scene moves.
+
+The engine owns its builds: ``build(scene)`` keeps one per live ``Scene`` in a weak table here
+(never on the scene, so copying or pickling a scene carries no renderer state), keyed by the
+scene's identity and checked against its versions; ``load(scene)`` makes a private build that
+nobody else sees (``DiffScene`` drives its parameters without touching what ``render`` uses).
+"""
 from __future__ import annotations
 
 import os
 import time
 import tempfile
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -305,16 +312,35 @@ def _tables(mi_scene, scene: Scene) -> tuple[dict, list]:
     return tables, sorted({v[0] for v in shapes.values() if v[0] > 0})
 
 
+# one build per live Scene, by identity; an entry goes when its scene is collected
+_BUILDS: "weakref.WeakKeyDictionary[Scene, BuiltScene]" = weakref.WeakKeyDictionary()
+# whether a load first runs the cyclic collector (see _release_dead_objects): a process-wide
+# act, so off unless the CLI or a worker opts in (synmitsuba.process.configure_process)
+SETTINGS = {"collect_before_load": False}
+
+
 def _release_dead_objects(scene: Scene) -> None:
-    """Free unreachable Mitsuba objects before a load. drjit traces a virtual call over every
-    live instance of its domain (BSDFs, shapes, emitters), so garbage left by an earlier scene
-    is compiled into the new scene's kernels; when Python collects it a few frames later, the
-    path tracer recompiles (about a second). Collecting here keeps kernels stable per load."""
-    import gc
-    scene._built = None
-    t = time.perf_counter()
-    gc.collect()
-    STATS["gc_seconds"] += time.perf_counter() - t
+    """Drop this scene's previous build and, when opted in, free unreachable Mitsuba objects
+    before a load. drjit traces a virtual call over every live instance of its domain (BSDFs,
+    shapes, emitters), so garbage left by an earlier scene is compiled into the new scene's
+    kernels; when Python collects it a few frames later, the path tracer recompiles (about a
+    second). Collecting here keeps kernels stable per load."""
+    _BUILDS.pop(scene, None)
+    if SETTINGS["collect_before_load"]:
+        import gc
+        t = time.perf_counter()
+        gc.collect()
+        STATS["gc_seconds"] += time.perf_counter() - t
+
+
+def cached_build(scene: Scene) -> BuiltScene | None:
+    """The build ``render`` would reuse for ``scene`` (None before its first render)."""
+    return _BUILDS.get(scene)
+
+
+def forget(scene: Scene) -> None:
+    """Drop the engine's build of ``scene`` (the next render loads it again)."""
+    _BUILDS.pop(scene, None)
 
 
 def release_memory() -> None:
@@ -358,15 +384,23 @@ def _trim_heap() -> None:
 
 
 def build(scene: Scene) -> BuiltScene:
-    """Load ``scene`` into Mitsuba, or reuse the cached load, moving meshes and curves in place
-    when only positions changed (no reload, compiled kernels reused)."""
-    import mitsuba as mi
-    cached: BuiltScene | None = getattr(scene, "_built", None)
+    """The engine's build of ``scene``: loaded into Mitsuba once, then reused, moving meshes and
+    curves in place when only positions changed (no reload, compiled kernels reused)."""
+    cached = _BUILDS.get(scene)
     if cached is not None and cached.versions[0] == scene.structure_version:
         if cached.versions[1] != scene.geometry_version:
             _update_in_place(cached, scene)
         return cached
     _release_dead_objects(scene)
+    built = load(scene)
+    _BUILDS[scene] = built
+    return built
+
+
+def load(scene: Scene) -> BuiltScene:
+    """A fresh Mitsuba build of ``scene`` that the engine does not keep: its owner may change
+    its parameters (``DiffScene``) without affecting ``build`` or ``render``."""
+    import mitsuba as mi
     d: dict = {"type": "scene"}
     for name, m in scene.meshes.items():
         d[name] = _mesh(m)
@@ -387,6 +421,5 @@ def build(scene: Scene) -> BuiltScene:
     built._pushed.update({n: m.vertices for n, m in scene.meshes.items()})
     built._pushed.update({f"{n}.normals": m.normals for n, m in scene.meshes.items()})
     built._pushed.update({k: v for n, c in scene.curves.items() for k, v in ((n, c.points), (f"{n}.radius", c.radius))})
-    scene._built = built
     STATS["loads"] += 1
     return built

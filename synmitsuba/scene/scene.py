@@ -1,7 +1,11 @@
 """``Scene``: what to render, as plain numpy data (meshes, curves, lights, environment).
 
-The renderer turns it into a Mitsuba scene and caches that; ``update_mesh`` changes vertex
-positions in place so animations reuse compiled kernels.
+The renderer (``synmitsuba.engine``) turns it into a Mitsuba scene and keeps that build
+itself, checked against the scene's two versions: ``structure_version`` moves whenever shapes,
+lights or the environment change (a reload), ``geometry_version`` when ``update_mesh`` /
+``update_curves`` move positions (an update in place, compiled kernels reused). Assigning
+``meshes``, ``curves``, ``lights`` or ``environment`` directly bumps the structure version
+too, so no change can leave a stale build behind.
 """
 from __future__ import annotations
 
@@ -61,7 +65,10 @@ def _finite(field_name: str, arr: np.ndarray, shape_desc: str, ok: bool) -> np.n
     return arr
 
 
-@dataclass
+_STRUCTURE = frozenset({"meshes", "curves", "lights", "environment"})
+
+
+@dataclass(eq=False)  # compared and hashed by identity: the engine keys its builds on scenes
 class Scene:
     """Meshes, curves, lights and an environment in metres, world y up."""
 
@@ -71,6 +78,15 @@ class Scene:
     environment: object = None
     structure_version: int = 0
     geometry_version: int = 0
+
+    def __setattr__(self, name: str, value) -> None:
+        object.__setattr__(self, name, value)
+        if name in _STRUCTURE and "structure_version" in self.__dict__:
+            object.__setattr__(self, "structure_version", self.structure_version + 1)
+
+    def __copy__(self) -> "Scene":
+        """A shallow copy with its own containers (adding to the copy leaves this scene alone)."""
+        return Scene(dict(self.meshes), dict(self.curves), list(self.lights), self.environment)
 
     def _check_name(self, name: str) -> str:
         if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_\-]*", name):

@@ -17,10 +17,10 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
-from synmitsuba.render import sensor as sensor_mod
+from synmitsuba.rendering import sensor as sensor_mod
 from synmitsuba.engine.build import build
 from synmitsuba.engine.settings import DENOISERS
-from synmitsuba.render.denoise import choose_sampler, guides, oidn
+from synmitsuba.rendering.denoise import choose_sampler, guides, oidn
 from synmitsuba.engine.variant import current_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
