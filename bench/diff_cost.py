@@ -36,7 +36,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     import mitsuba as mi
     import synmitsuba as sm
-    from synmitsuba.engine.variant import current_variant
+    from synmitsuba.engine.variant import require_variant
     from synmitsuba.rendering import sensor as sensor_mod
     sm.set_variant()
     recipe, human = cached(args.subjects, build_subject)
@@ -51,7 +51,7 @@ def main(argv=None) -> int:
     names = [f"subject1_tshirt.{k}" for k in ("base_rgb", "pattern_rgb", "pattern_scale", "phase")]
     sm.fit_texture(ds, [cam], [target], names, steps=1, spp=args.spp)  # compiles the kernels
     fit = sm.fit_texture(ds, [cam], [target], names, steps=args.steps, spp=args.spp)
-    sensor_mod.register(current_variant())
+    sensor_mod.register(require_variant())
     sensor = mi.load_dict(sensor_mod.sensor_dict(cam, args.spp))
     path = mi.load_dict({"type": "path", "max_depth": 4})
     mi.render(ds.built.mi_scene, sensor=sensor, integrator=path, spp=args.spp, seed=0)
@@ -59,7 +59,7 @@ def main(argv=None) -> int:
     for i in range(args.steps):
         np.array(mi.render(ds.built.mi_scene, sensor=sensor, integrator=path, spp=args.spp, seed=i + 1))
     raw = (time.perf_counter() - t) / args.steps
-    print(json.dumps({"variant": current_variant(), "size": args.size, "spp": args.spp, "steps": args.steps,
+    print(json.dumps({"variant": require_variant(), "size": args.size, "spp": args.spp, "steps": args.steps,
                       "fitted": names, "seconds_per_step": round(fit.seconds_per_step, 3),
                       "raw_path_render_seconds": round(raw, 3),
                       "step_over_raw_render": round(fit.seconds_per_step / raw, 2),

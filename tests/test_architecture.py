@@ -259,3 +259,33 @@ def test_motion_sources_resolve_in_one_place(tmp_path):
         load_motion("fly", rng, field="subjects[3].motion")
     with pytest.raises(ConfigError, match="no such file"):
         load_motion("missing.bvh", rng, base=str(tmp_path))
+
+
+def test_library_use_leaves_the_process_as_it_found_it(tmp_path):
+    """Building a subject, rendering it and drawing the stats figure change no environment
+    variable, torch thread count, collector state or matplotlib backend: only the CLI or a
+    worker opts in (synmitsuba.process.configure_process)."""
+    code = textwrap.dedent("""
+        import gc, json, os
+        import matplotlib, numpy as np, torch
+        before = (dict(os.environ), torch.get_num_threads(), gc.get_freeze_count(), matplotlib.get_backend())
+        import synmitsuba as sm
+        from synmitsuba.data.stats import stats_figure
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(1), {"texture_size": 64}))
+        scene = sm.Scene(); h.add_to(scene, instance=1); scene.set_environment(sm.Constant(1.0))
+        sm.render(scene, sm.Camera.look_at(eye=(0, 1, 3), target=(0, 1, 0), width=16, height=16), spp=1)
+        stats_figure({k: [1.0, 2.0] for k in ("visible_fraction", "subject_height_m", "stature_m", "bmi",
+                      "camera_distance_m", "camera_pitch_deg", "skin_ita_deg")} | {k: {"a": 1} for k in
+                      ("keypoint_visibility", "garments", "motions")} | {"sequences": 1, "subjects": 1, "frames": 1,
+                      "samples": 1}, os.path.join(%r, "s.png"))
+        after = (dict(os.environ), torch.get_num_threads(), gc.get_freeze_count(), matplotlib.get_backend())
+        changed = sorted(k for k, v in set(after[0].items()) ^ set(before[0].items())
+                         if not k.startswith("TORCHINDUCTOR_"))  # torch's inductor sets its own cache folder
+        print(changed)
+        print(json.dumps([not changed, before[1:], after[1:]]))
+    """ % str(tmp_path))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    same_env, before, after = json.loads(out.stdout.strip().splitlines()[-1])
+    assert same_env, out.stdout.strip().splitlines()[-2]  # the variables that changed
+    assert before == after

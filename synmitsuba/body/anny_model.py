@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.body.skeleton import Skeleton
+from synmitsuba.process import SETTINGS
 from synmitsuba.schema import MapOf, Number
 
 PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")
@@ -73,15 +74,18 @@ def _is_warp_noise(line: str) -> bool:
 
 @functools.lru_cache(maxsize=1)
 def load_anny():
-    """The anny model (float32, CPU), built once per process; anny caches it on disk too."""
-    os.environ.setdefault("ANNY_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "anny"))
+    """The anny model (float32, CPU), built once per process; anny caches it on disk too
+    (``ANNY_CACHE_DIR``, default ``~/.cache/anny``). Torch's threads and the collector are left
+    alone unless the process opted in (``synmitsuba.process.configure_process``)."""
     import torch
     with _without_warp_banner():
         import anny
         _quiet_warp()
-        torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
+        if SETTINGS.torch_threads:
+            torch.set_num_threads(max(1, min(SETTINGS.torch_threads, torch.get_num_threads())))
         model = anny.Anny().to(dtype=torch.float32)
-    _freeze_long_lived()
+    if SETTINGS.freeze_after_model_load:
+        _freeze_long_lived()
     return model
 
 

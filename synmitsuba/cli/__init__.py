@@ -102,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     from synmitsuba.errors import SynMitsubaError
+    from synmitsuba.process import configure_process
+    configure_process()  # the CLI owns its process: collector and thread settings (library code never sets them)
     prog = f"synmitsuba {args.command}"
     show_warning = _one_line_warnings(prog)
     main_thread = threading.current_thread() is threading.main_thread()

@@ -1,8 +1,6 @@
 """``synmitsuba info``: versions, the variant and the libLLVM in use."""
 from __future__ import annotations
 
-import os
-
 from synmitsuba.cli.args import add_variant_option
 
 
@@ -10,6 +8,7 @@ def run(args) -> int:
     import importlib.metadata as md
 
     import synmitsuba as sm
+    from synmitsuba.engine.variant import libllvm, thread_count
     variant = sm.set_variant(args.variant)
     import drjit as dr
     rows = [("synmitsuba", sm.__version__)]
@@ -21,8 +20,7 @@ def run(args) -> int:
     rows.append(("variant", variant))
     if variant.startswith("llvm"):
         rows.append(("libLLVM", ".".join(map(str, dr.detail.llvm_version()))
-                     + f" ({os.environ.get('DRJIT_LIBLLVM_PATH', 'drjit default search')})"))
-    from synmitsuba.engine.variant import thread_count
+                     + f" ({libllvm() or 'drjit default search'})"))
     rows.append(("threads", str(thread_count())))
     width = max(len(k) for k, _ in rows)
     for k, v in rows:

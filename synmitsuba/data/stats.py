@@ -71,16 +71,16 @@ def _body_measures(phenotypes: list[dict], chunk: int = 32) -> dict:
 
 
 def stats_figure(stats: dict, path: str) -> str:
-    """One PNG with a panel per distribution."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """One PNG with a panel per distribution (a bare ``Figure``: no pyplot, so the process's
+    matplotlib backend is left as it was)."""
+    from matplotlib.figure import Figure
 
     from synmitsuba.io.preview import atomic_path
     hists = ("visible_fraction", "subject_height_m", "stature_m", "bmi", "camera_distance_m", "camera_pitch_deg",
              "skin_ita_deg")
     bars = ("keypoint_visibility", "garments", "motions")
-    fig, axes = plt.subplots(2, 5, figsize=(20, 7))
+    fig = Figure(figsize=(20, 7))
+    axes = fig.subplots(2, 5)
     for ax, key in zip(axes.flat, hists + bars):
         if key in hists:
             ax.hist(stats[key], bins=20, color="#3a6ea5")
@@ -94,7 +94,6 @@ def stats_figure(stats: dict, path: str) -> str:
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=80, format="png")
-    plt.close(fig)
     return path
 
 

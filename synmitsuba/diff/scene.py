@@ -165,10 +165,10 @@ class DiffScene:
         its own paths (seed ``seed + 1``), so a loss's gradient is unbiased."""
         import mitsuba as mi
         from synmitsuba.rendering import sensor as sensor_mod
-        from synmitsuba.engine.variant import current_variant
+        from synmitsuba.engine.variant import require_variant
         if not isinstance(camera, Camera):
             raise ConfigError("camera", type(camera).__name__, "give a synmitsuba.Camera")
-        sensor_mod.register(current_variant())
+        sensor_mod.register(require_variant())
         self.apply()
         sensor = mi.load_dict(sensor_mod.sensor_dict(camera, spp))
         # only the parameters the variables drive (a full dict(params) fails on curve shapes' entries)

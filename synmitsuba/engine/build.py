@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.geometry import frame
+from synmitsuba.process import SETTINGS
 from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
                                         PointLight, SunSky, hair_pigments, hair_sigma_a)
 from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
@@ -314,9 +315,6 @@ def _tables(mi_scene, scene: Scene) -> tuple[dict, list]:
 
 # one build per live Scene, by identity; an entry goes when its scene is collected
 _BUILDS: "weakref.WeakKeyDictionary[Scene, BuiltScene]" = weakref.WeakKeyDictionary()
-# whether a load first runs the cyclic collector (see _release_dead_objects): a process-wide
-# act, so off unless the CLI or a worker opts in (synmitsuba.process.configure_process)
-SETTINGS = {"collect_before_load": False}
 
 
 def _release_dead_objects(scene: Scene) -> None:
@@ -326,7 +324,7 @@ def _release_dead_objects(scene: Scene) -> None:
     kernels; when Python collects it a few frames later, the path tracer recompiles (about a
     second). Collecting here keeps kernels stable per load."""
     _BUILDS.pop(scene, None)
-    if SETTINGS["collect_before_load"]:
+    if SETTINGS.collect_before_load:  # process-wide: only where the CLI or a worker opted in
         import gc
         t = time.perf_counter()
         gc.collect()

@@ -9,6 +9,7 @@ exits 0 when the LLVM backend works (the Makefile uses it to decide whether to i
 from __future__ import annotations
 
 import glob
+import contextlib
 import os
 import re
 import subprocess
@@ -59,22 +60,36 @@ def find_libllvm() -> list[tuple[tuple[int, ...] | None, str]]:
 
 
 def choose_libllvm() -> str | None:
-    """Set DRJIT_LIBLLVM_PATH to the newest libLLVM >= 16 unless the user already set it.
-
-    Returns the path chosen (or the user's). Raises LLVMError when only too-old ones exist.
-    """
+    """The libLLVM drjit should load: the user's DRJIT_LIBLLVM_PATH, else the newest libLLVM
+    >= 16 found (None: nothing found, or versions unknown). Raises LLVMError when only too-old
+    ones exist. Reads the environment, never writes it: ``libllvm_path`` hands the choice to
+    drjit only while its backend starts."""
     if os.environ.get("DRJIT_LIBLLVM_PATH"):
         return os.environ["DRJIT_LIBLLVM_PATH"]
     libs = find_libllvm()
     good = [p for v, p in libs if v is not None and v[0] >= MIN_VERSION]
     if good:
-        os.environ["DRJIT_LIBLLVM_PATH"] = good[0]
         return good[0]
     known = [(v, p) for v, p in libs if v is not None]
     if known and len(known) == len(libs):
         have = ", ".join(f"{p} (LLVM {v[0]})" for v, p in known)
         raise LLVMError(f"only old libLLVM found: {have}. {INSTALL_HINT}")
     return None  # nothing found, or unknown versions: let the probe decide
+
+
+@contextlib.contextmanager
+def libllvm_path(path: str | None):
+    """DRJIT_LIBLLVM_PATH set to ``path`` for the duration (drjit reads it when its LLVM
+    backend starts, inside ``mi.set_variant``), then restored: the process keeps its
+    environment."""
+    before = os.environ.get("DRJIT_LIBLLVM_PATH")
+    if path and not before:
+        os.environ["DRJIT_LIBLLVM_PATH"] = path
+    try:
+        yield
+    finally:
+        if path and not before:
+            os.environ.pop("DRJIT_LIBLLVM_PATH", None)
 
 
 def probe(timeout: float = 120.0) -> tuple[bool, str]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from synmitsuba.engine.build import aligned_floats, build
-from synmitsuba.engine.variant import current_variant
+from synmitsuba.engine.variant import require_variant
 from synmitsuba.geometry import bounds
 from synmitsuba.scene.scene import Scene
 
@@ -14,7 +14,7 @@ def _intersect(scene: Scene, origins, directions, maxt=None, coherent: bool = Fa
     """(built scene, preliminary intersection, hit mask, shape registry ids) of the rays."""
     import drjit as dr
     import mitsuba as mi
-    current_variant()
+    require_variant()
     built = build(scene)
     d = np.asarray(directions, np.float64)
     o = np.broadcast_to(np.asarray(origins, np.float64), d.shape)
@@ -81,7 +81,7 @@ def hits_through(scene: Scene, origins, directions, onto, maxt=None, rounds: int
     (30-70 ms each with hair)."""
     import drjit as dr
     import mitsuba as mi
-    current_variant()
+    require_variant()
     built = build(scene)
     d = np.asarray(directions, np.float64).reshape(-1, 3)
     o = np.broadcast_to(np.asarray(origins, np.float64), d.shape)

@@ -11,19 +11,11 @@ import os
 
 from synmitsuba.errors import ConfigError, LLVMError
 from synmitsuba.engine import llvm
+from synmitsuba.process import available_cpus
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 GPU_VARIANT = "cuda_ad_rgb"
-_state: dict = {"variant": None, "threads": None}
-
-
-def _cgroup_cpus() -> int | None:
-    """CPUs allowed by a cgroup v2 quota (containers, slurm), which affinity does not show."""
-    try:
-        quota, period = open("/sys/fs/cgroup/cpu.max").read().split()[:2]
-        return None if quota == "max" else max(1, int(int(quota) / int(period)))
-    except (OSError, ValueError):
-        return None
+_state: dict = {"variant": None, "threads": None, "libllvm": None}
 
 
 def _threads() -> int:
@@ -32,12 +24,7 @@ def _threads() -> int:
         if not env.isdigit() or int(env) < 1:
             raise ConfigError("SYNMITSUBA_THREADS", env, "give a positive integer")
         return int(env)
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # macOS
-        n = os.cpu_count() or 1
-    quota = _cgroup_cpus()
-    return max(1, min(n, quota) if quota else n)
+    return available_cpus()
 
 
 def auto_variant() -> str:
@@ -64,8 +51,7 @@ def set_variant(name: str | None = None, threads: int | None = None) -> str:
         name = auto_variant()
     if _state["variant"] == name:
         return name
-    if name.startswith("llvm"):
-        _ensure_llvm()
+    path = _ensure_llvm() if name.startswith("llvm") else None
     import drjit as dr
     import mitsuba as mi
     if name not in mi.variants():
@@ -75,7 +61,8 @@ def set_variant(name: str | None = None, threads: int | None = None) -> str:
         dr.set_thread_count(n)
         _state["threads"] = n
     try:
-        mi.set_variant(name)
+        with llvm.libllvm_path(path):  # drjit reads it as its backend starts; the environment is restored
+            mi.set_variant(name)
     except ImportError as exc:
         hint = ("it needs an NVIDIA GPU with a working driver; on a CPU use llvm_ad_rgb"
                 if name.startswith("cuda") else "see `synmitsuba info`")
@@ -84,21 +71,36 @@ def set_variant(name: str | None = None, threads: int | None = None) -> str:
     return name
 
 
-def _ensure_llvm() -> None:
+def _ensure_llvm() -> str | None:
+    """The libLLVM for drjit (see ``llvm.choose_libllvm``), probed in a subprocess when its
+    version cannot be read from its name."""
     if _state.get("llvm_ok"):
-        return
+        return _state["libllvm"]
     path = llvm.choose_libllvm()  # raises LLVMError when only old ones are present
     named = path and llvm.version_from_name(os.path.realpath(path)) or (path and llvm.version_from_name(path))
     if not (named and named[0] >= llvm.MIN_VERSION):
         ok, msg = llvm.probe()
         if not ok:
             raise LLVMError(msg)
-    _state["llvm_ok"] = True
+    _state["llvm_ok"], _state["libllvm"] = True, path
+    return path
 
 
-def current_variant() -> str:
-    """The variant in use, selecting the default one if none was chosen yet."""
+def current_variant() -> str | None:
+    """The variant chosen in this process (None before ``set_variant``): a question, never a
+    choice; ``require_variant`` is what code that needs one calls."""
+    return _state["variant"]
+
+
+def require_variant() -> str:
+    """The chosen variant; when none was chosen yet, ``set_variant()``'s default (``auto``,
+    or ``SYNMITSUBA_VARIANT``), as ``render`` and the ray casts document."""
     return _state["variant"] or set_variant()
+
+
+def libllvm() -> str | None:
+    """The libLLVM handed to drjit (None: drjit's own search, or a CUDA variant)."""
+    return _state["libllvm"]
 
 
 def thread_count() -> int | None:

@@ -21,7 +21,7 @@ from synmitsuba.rendering import sensor as sensor_mod
 from synmitsuba.engine.build import build
 from synmitsuba.engine.settings import DENOISERS
 from synmitsuba.rendering.denoise import choose_sampler, guides, oidn
-from synmitsuba.engine.variant import current_variant
+from synmitsuba.engine.variant import require_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.layers import Layer
@@ -33,7 +33,7 @@ _integrators: dict = {}
 
 def _integrator(max_depth: int):
     import mitsuba as mi
-    key = (current_variant(), max_depth)
+    key = (require_variant(), max_depth)
     if key not in _integrators:
         _integrators[key] = mi.load_dict({"type": "path", "max_depth": max_depth})
     return _integrators[key]
@@ -58,7 +58,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
         warnings.warn(SynMitsubaWarning("the scene has no environment and no light: the RGB is black; add one "
                                         "with scene.set_environment(sm.SunSky()) or scene.add_light(...)"),
                       stacklevel=2)
-    variant = current_variant()
+    variant = require_variant()
     sensor_mod.register(variant)
     t0 = time.perf_counter()
     built = build(scene)
