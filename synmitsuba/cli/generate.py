@@ -26,7 +26,8 @@ def add_parser(sub) -> None:
                        description="Render a dataset: one task per sequence, seeded from (seed, index) only, written "
                        "to DIR/seq_XXXXXX/ and listed in DIR/manifest.jsonl when complete. A rerun skips complete "
                        "sequences and redoes partial ones.")
-    p.add_argument("config", help="generation config (YAML), e.g. configs/demo.yaml")
+    p.add_argument("config", help="generation config: a YAML path (configs/demo.yaml) or a shipped config by name "
+                   "(tiny, demo, hps, nerf, compose)")
     p.add_argument("--out", required=True, help="dataset folder (created)")
     p.add_argument("--sequences", type=positive_int, help="sequences (default: the config's)")
     p.add_argument("--seed", type=natural_int, help="global seed (default: the config's)")

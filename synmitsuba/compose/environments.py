@@ -15,11 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.resources import asset_path
 from synmitsuba.schema import Choice, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.materials import EnvMap, Material, SunSky
 
-SCENES_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "scenes")
+SCENES_DIR = asset_path("scenes")  # package data: works from a wheel as from a checkout
 ENV_DIR = os.path.join(SCENES_DIR, "environments")
 GROUND_HALF_SIZE = 20000.0  # metres: the ground's edge lies < 0.01 degrees below the horizon from 3 m up
 GROUND_INSTANCE = 1

@@ -12,6 +12,7 @@ from synmitsuba.annotate.smplx_fit import SMPLXOptions
 from synmitsuba.compose.composition import ComposeConfig
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.errors import ConfigError
+from synmitsuba.resources import config_names, find_config
 from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, optional, read_yaml, spec
 
 
@@ -51,8 +52,12 @@ def _override(data: dict, assignment: str) -> None:
 
 
 def load_generate_config(path: str, overrides=()) -> GenerateConfig:
-    """The config in ``path`` with ``overrides`` applied, every key checked (errors name the
-    key path); the compose section's motion paths start at the file's folder."""
+    """The config in ``path`` (or a shipped one by name: ``tiny``, ``demo``, ``hps``, ``nerf``)
+    with ``overrides`` applied, every key checked (errors name the key path); the compose
+    section's motion paths start at the file's folder."""
+    path = find_config(path)
+    if not os.path.isfile(path):
+        raise ConfigError("config file", path, f"no such file; give a path or a shipped config: {', '.join(config_names())}")
     data = read_yaml(path, "config file", "sequences, render, compose, ...")
     for assignment in overrides:
         _override(data, assignment)

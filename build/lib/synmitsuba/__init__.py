@@ -1,0 +1,44 @@
+"""synmitsuba: synthetic, exactly annotated datasets of people rendered with Mitsuba 3.
+
+    import synmitsuba as sm
+    sm.set_variant()                     # cuda_ad_rgb on a GPU, else llvm_ad_rgb
+    scene = sm.Scene(); scene.add_mesh(...)
+    sample = sm.render(scene, sm.Camera.look_at(...), spp=16, seed=0)
+    sm.write_sample(sample, "out/0000")
+
+Names are imported on first use: ``import synmitsuba`` loads neither Mitsuba nor torch.
+"""
+from synmitsuba._lazy import lazy_exports
+
+__version__ = "0.1.0"
+
+_FROM = {
+    "synmitsuba.errors": ("ConfigError", "LLVMError", "SynMitsubaError", "SynMitsubaWarning"),
+    "synmitsuba.scene": ("Camera", "Layer", "Material", "Constant", "SunSky", "EnvMap", "PointLight",
+                         "DirectionalLight", "AreaLight", "Scene", "MeshShape", "CurveShape"),
+    "synmitsuba.sample": ("Sample", "PASSES", "register_pass"),
+    "synmitsuba.engine.variant": ("set_variant", "current_variant"),
+    "synmitsuba.io": ("write_sample", "read_sample", "list_samples", "to_srgb8", "write_png",
+                      "contact_sheet", "export_coco", "export_humandata", "sample_panel"),
+    "synmitsuba.body": ("SubjectRecipe", "sample_subject", "build_subject", "LayeredHuman", "PosedLayer", "Skeleton",
+                        "forward_kinematics", "anny_uv_masks", "GARMENT_KINDS", "ACCESSORY_KINDS"),
+    "synmitsuba.motion": ("Motion", "load_bvh", "parse_bvh", "BVHError", "load_amass", "smplx_skeleton",
+                          "procedural_motion", "MOTION_KINDS", "foot_sliding", "retarget", "humanoid_skeleton",
+                          "MotionLibrary", "random_window", "is_allowed", "load_motion"),
+    "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry", "compose_scene",
+                           "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
+    "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
+    "synmitsuba.annotate": ("Annotator", "fit_smplx", "SMPLXFit", "SMPLXOptions", "write_anny_model"),
+    "synmitsuba.data": ("SynDataset",),
+    "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "add_body_model_fits"),
+    "synmitsuba.diff": ("DiffScene", "fit_texture", "FitResult"),
+}
+_EXPORTS = {name: module for module, names in _FROM.items() for name in names}
+_EXPORTS["render"] = "synmitsuba.rendering.passes:render"  # a plain function (the package is synmitsuba.rendering)
+_EXPORTS["metrics"] = "synmitsuba.metrics:"
+_EXPORTS["diff"] = "synmitsuba.diff:"
+_EXPORTS["SampleDataset"] = "synmitsuba.data.dataset:SynDataset"  # the earlier name of the one dataset class
+_EXPORTS["generate_dataset"] = "synmitsuba.generate.run:generate"  # sm.generate is the subpackage
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

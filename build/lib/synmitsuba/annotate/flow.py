@@ -1,0 +1,149 @@
+"""Exact optical flow between two frames of a scene.
+
+Each pixel-centre ray of frame f hits a surface point: a triangle and its barycentric
+coordinates (meshes), or a curve segment, the share along it and the offset from its axis
+(hair). That same material point is taken to frame g (the triangle's vertices at g; the
+segment's control points at g, plus the offset) and projected with g's camera: flow = its pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at
+g, 1 hidden at g (the ray from g's eye meets another surface first), 2 outside g's image or
+behind its camera, 3 nothing hit at f (background: flow 0).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synmitsuba.engine.raycast import cast, surface_hits
+from synmitsuba.errors import ConfigError
+from synmitsuba.scene.camera import Camera
+from synmitsuba.scene.scene import Scene
+
+SEEN, HIDDEN, OUTSIDE, BACKGROUND = 0, 1, 2, 3
+
+
+@dataclass
+class Geometry:
+    """A scene's moving shapes at one frame: mesh vertices (V, 3) and curve control points
+    (N, K, 3) by name."""
+
+    vertices: dict = field(default_factory=dict)
+    curves: dict = field(default_factory=dict)
+
+
+def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Geometry) -> np.ndarray:
+    """(N, 3) world positions at the other frame of the points hit now (nan where none)."""
+    out = np.full((len(hits["t"]), 3), np.nan)
+    order = np.argsort(hits["shape"], kind="stable")
+    ids, starts = np.unique(hits["shape"][order], return_index=True)
+    for idx, sel in zip(ids, np.split(order, starts[1:])):
+        if idx < 0:
+            continue
+        name = hits["names"][idx]
+        if name in scene.meshes:
+            V = then.vertices.get(name, scene.meshes[name].vertices)
+            tri = V[scene.meshes[name].faces[hits["prim"][sel]].astype(np.int64)]
+            u, v = hits["u"][sel, None], hits["v"][sel, None]
+            out[sel] = (1 - u - v) * tri[:, 0] + u * tri[:, 1] + v * tri[:, 2]
+        else:  # a curve: segment prim of strand prim // (K - 1), u along it; p lies a radius off its axis
+            p = rays_o + hits["t"][sel, None] * rays_d[sel]
+            if name in then.curves:
+                P0 = now.curves.get(name, scene.curves[name].points)
+                k = P0.shape[1] - 1
+                s, j, u = hits["prim"][sel] // k, hits["prim"][sel] % k, hits["u"][sel, None]
+
+                def axis(P):
+                    return (1 - u) * P[s, j] + u * P[s, j + 1]
+                p = axis(then.curves[name]) + (p - axis(P0))
+            out[sel] = p
+    return out
+
+
+def pixel_hits(scene: Scene, cam: Camera) -> dict:
+    """``surface_hits`` of ``cam``'s pixel-centre rays, with the rays (``"rays"``): what
+    ``exact_flow`` starts from, shared by a view's forward and backward flow."""
+    d = cam.pixel_rays().reshape(-1, 3)
+    return {**surface_hits(scene, cam.center, d), "rays": d}
+
+
+def exact_flow(scene: Scene, cam: Camera, cam_other: Camera, now: Geometry, then: Geometry,
+               scene_then: Scene | None = None, hits: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Flow (H, W, 2) in pixels from ``cam``'s frame to ``cam_other``'s and the flags (H, W).
+    ``scene`` holds the geometry of ``cam``'s frame; ``now`` / ``then`` give the moving shapes at
+    both frames. The visibility test at the other frame runs on ``scene_then`` (a scene already
+    at that frame, see ``geometry_copy``) or else on ``scene`` moved there and back. ``hits``:
+    ``pixel_hits(scene, cam)``, when already cast."""
+    H, W = cam.height, cam.width
+    hits = pixel_hits(scene, cam) if hits is None else hits
+    d = hits["rays"]
+    P = _points_at(scene, hits, cam.center, d, now, then)
+    ok = np.isfinite(P[:, 0])
+    uv, z = cam_other.project(np.where(ok[:, None], P, 0.0))
+    px = np.stack(np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5), -1).reshape(-1, 2)
+    flow = np.where(ok[:, None], uv - px, 0.0)
+    inside = ok & (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < W) & (uv[:, 1] >= 0) & (uv[:, 1] < H)
+    flags = np.where(ok, OUTSIDE, BACKGROUND).astype(np.uint8)
+    if inside.any():
+        hidden = (_blocked(scene_then, cam_other.center, P[inside]) if scene_then is not None
+                  else _hidden(scene, cam_other.center, P[inside], now, then))
+        flags[inside] = np.where(hidden, HIDDEN, SEEN)
+    return flow.reshape(H, W, 2).astype(np.float32), flags.reshape(H, W)
+
+
+def _blocked(scene: Scene, eye, points, tol: float = 2e-3) -> np.ndarray:
+    """Whether a surface of ``scene`` lies between ``eye`` and each point (beyond a tolerance)."""
+    d = points - eye
+    dist = np.linalg.norm(d, axis=1)
+    _, t = cast(scene, eye, d / dist[:, None], dist)
+    return t < dist - tol * np.maximum(dist, 1.0)
+
+
+def geometry_copy(scene: Scene) -> Scene:
+    """The shapes of ``scene`` with plain materials and their ids: a second scene to hold
+    another frame's geometry for visibility tests (no textures, no lights)."""
+    copy = Scene()
+    for name, m in scene.meshes.items():
+        copy.add_mesh(name, m.vertices, m.faces, instance=m.instance, layer=m.layer)
+    for name, c in scene.curves.items():
+        copy.add_curves(name, c.points, c.radius, instance=c.instance, layer=c.layer)
+    return copy
+
+
+def _apply(scene: Scene, geometry: Geometry) -> None:
+    for name, v in geometry.vertices.items():
+        scene.update_mesh(name, v)
+    for name, p in geometry.curves.items():
+        if name in scene.curves:
+            scene.update_curves(name, p)
+
+
+def subjects_geometry(subjects: list, frame: int) -> Geometry:
+    """The moving shapes of placed subjects (``compose.subjects.PlacedSubject``) at ``frame``:
+    every mesh layer's vertices and every curve layer's (hair, beard) control points."""
+    g = Geometry()
+    for p in subjects:
+        if not 0 <= int(frame) < p.motion.n_frames:
+            raise ConfigError("frame", frame, f"the clip has frames 0..{p.motion.n_frames - 1}: there is no flow "
+                              "before the first frame or past the last")
+        rot, root = p.motion.frame(int(frame))
+        for layer in p.human.pose(rot, root):
+            if layer.is_curves:
+                g.curves[f"{p.prefix}_{layer.name}"] = layer.points
+            else:
+                g.vertices[f"{p.prefix}_{layer.name}"] = layer.vertices
+    return g
+
+
+def _hidden(scene: Scene, eye, points, now: Geometry, then: Geometry) -> np.ndarray:
+    """Whether each point, at the other frame, is behind another surface seen from ``eye``."""
+    saved = {n: (scene.curves[n].points, scene.curves[n].previous_points) for n in then.curves if n in scene.curves}
+    previous = {n: scene.meshes[n].previous_vertices for n in then.vertices}
+    _apply(scene, then)
+    try:
+        return _blocked(scene, eye, points)
+    finally:  # back to this frame, with the scene's own previous positions kept
+        _apply(scene, now)
+        for n, (points_now, prev) in saved.items():
+            scene.update_curves(n, points_now)
+            scene.curves[n].previous_points = prev
+        for n, prev in previous.items():
+            scene.meshes[n].previous_vertices = prev

@@ -1,0 +1,139 @@
+"""SMPL-X and SMPL labels for layered subjects: the SynBody paper's two-step fit, run on the
+model files the user supplies (``synmitsuba.body.smplx_model``; nothing licensed ships here).
+
+1. Shape, once per subject: betas (and, with ``gender="auto"``, the gender file that fits
+   best) fitted to the anny body in its rest pose, the model's pose free, from rotations that
+   turn its bones onto anny's; losses: surface distance both ways (point to plane at the
+   nearest vertex, robust, normals agreeing) and the joints ``body_model_to_anny`` pairs.
+2. Pose, per frame: global orientation, body pose and translation start from the clip (each
+   model joint turns as its anny bone does, from the fitted rest pose) and are refined by the
+   same losses plus a pull toward that start (the pose prior) and between neighbouring frames,
+   in chunks of frames batched in torch, each chunk warm-started from the last frame before it.
+
+Hands follow anny's finger bones (a clip that does not move the fingers keeps anny's hand);
+jaw, eyes and expression stay neutral (zeros). Each frame records the mean and max distance
+from the model's vertices to the posed anny body (exact point-to-triangle, mm) and the joint
+error (paired joints, the rest-pose offset between the two rigs turning with the bone, mm);
+a frame whose mean surface distance exceeds ``threshold_mm`` is flagged (``ok`` false).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synmitsuba.annotate.bodyparams import root_in_camera
+from synmitsuba.annotate.smplx_solve import FitSettings, fit_frames, fit_shape
+from synmitsuba.body.smplx_model import GENDERS, available_genders, find_model, load_model
+from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import axis_angle_to_matrix, matrix_to_axis_angle
+from synmitsuba.schema import POSITIVE, Choice, Flag, Number, Params, Text, optional, spec
+
+
+@dataclass
+class SMPLXOptions(Params):
+    """Generation configs' ``smplx:`` section: fit SMPL-X (and SMPL) to every subject."""
+
+    enabled: bool = spec(False, Flag(), doc="fit SMPL-X to every subject; needs the model files")
+    model_path: str | None = spec(None, optional(Text()), doc="folder of SMPLX_*.npz (default: $SMPLX_MODEL_PATH)")
+    smpl: bool = spec(False, Flag(), doc="fit SMPL too (SMPL_*.npz or .pkl in the same folder or $SMPL_MODEL_PATH)")
+    gender: str = spec("auto", Choice(("auto",) + GENDERS), doc="auto: each file present, the best fit kept")
+    n_betas: int = spec(10, POSITIVE)
+    threshold_mm: float = spec(10.0, Number(0.0), doc="frames whose mean surface distance exceeds it are flagged")
+
+    def __post_init__(self):
+        if self.enabled:  # no work starts before the files are known to be there
+            for kind in self.kinds:
+                try:
+                    find_model(self.model_path, "neutral" if self.gender == "auto" else self.gender, kind)
+                except ConfigError as exc:
+                    if self.gender != "auto" or not available_genders(self.model_path, kind):
+                        raise ConfigError("model_path", self.model_path, f"{exc.field}: {exc.fix}") from None
+
+    @property
+    def kinds(self) -> tuple:
+        return ("smplx", "smpl") if self.smpl else ("smplx",)
+
+
+def fit_subject(human, clip, frames, options: SMPLXOptions, settings: FitSettings | None = None) -> dict:
+    """{kind: SMPLXFit} for the kinds ``options`` asks for (empty when disabled)."""
+    if not options.enabled:
+        return {}
+    return {kind: fit_smplx(human, clip, options.model_path, kind, options.gender, frames, options.n_betas,
+                            options.threshold_mm, settings) for kind in options.kinds}
+
+
+@dataclass
+class SMPLXFit:
+    """A subject's fitted parameters for ``frames`` of its clip (model joint order, axis-angle,
+    local; ``pose[:, 0]`` is the global orientation), world frame (metres, y up)."""
+
+    kind: str
+    gender: str
+    betas: np.ndarray           # (B,)
+    frames: np.ndarray          # (N,) clip frames
+    pose: np.ndarray            # (N, J, 3)
+    transl: np.ndarray          # (N, 3)
+    pelvis: np.ndarray          # (3,) the shaped model's rest pelvis joint: the pivot of global_orient
+    surface_mean_mm: np.ndarray  # (N,)
+    surface_max_mm: np.ndarray   # (N,)
+    joint_mm: np.ndarray         # (N,)
+    threshold_mm: float = 10.0
+    joint_names: tuple = ()
+    n_expression: int = 10
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> np.ndarray:
+        return self.surface_mean_mm <= self.threshold_mm
+
+    def index(self, frame: int) -> int:
+        hit = np.flatnonzero(self.frames == int(frame))
+        if not len(hit):
+            raise ConfigError("frame", frame, f"not fitted; fitted clip frames: {self.frames[:8].tolist()}...")
+        return int(hit[0])
+
+    def params(self, frame: int, camera=None) -> dict:
+        """The frame's parameters in the smplx package's names (world frame, or ``camera``'s:
+        global orientation composed with R, translation such that the posed model is R v + t)."""
+        i = self.index(frame)
+        pose = self.pose[i].copy()
+        transl = self.transl[i].copy()
+        if camera is not None:
+            R0, transl = root_in_camera(axis_angle_to_matrix(pose[0]), transl, self.pelvis, camera)
+            pose[0] = matrix_to_axis_angle(R0)
+        out = {"model": self.kind, "gender": self.gender, "betas": self.betas.copy(), "global_orient": pose[0],
+               "transl": transl}
+        if self.kind == "smplx":
+            out.update(body_pose=pose[1:22], jaw_pose=pose[22], leye_pose=pose[23], reye_pose=pose[24],
+                       left_hand_pose=pose[25:40], right_hand_pose=pose[40:55], expression=np.zeros(self.n_expression))
+        else:
+            out["body_pose"] = pose[1:]
+        out["fit"] = {"surface_mean_mm": float(self.surface_mean_mm[i]), "surface_max_mm": float(self.surface_max_mm[i]),
+                      "joint_mm": float(self.joint_mm[i]), "ok": bool(self.ok[i])}
+        return out
+
+
+def fit_smplx(human, clip, model_path: str | None = None, kind: str = "smplx", gender: str = "auto",
+              frames=None, n_betas: int = 10, threshold_mm: float = 10.0,
+              settings: FitSettings | None = None) -> SMPLXFit:
+    """Fit SMPL-X (``kind="smplx"``) or SMPL to a layered human (its anny body) over ``frames``
+    (default all) of ``clip`` (a ``Motion`` on the human's skeleton, as placed in the scene).
+    ``gender="auto"`` fits every gender file present and keeps the best."""
+    s = settings or FitSettings()
+    body = getattr(human, "body", human)
+    if clip.skeleton.names != body.skeleton.names:
+        raise ConfigError("clip", clip.source or "motion", "the clip must be on the human's skeleton: "
+                          "retarget it first (sm.retarget(motion, human.skeleton))")
+    frames = np.arange(clip.n_frames) if frames is None else np.asarray(frames, np.int64)
+    if len(frames) == 0 or frames.min() < 0 or frames.max() >= clip.n_frames:
+        raise ConfigError("frames", frames.tolist()[:8], f"give clip frames in [0, {clip.n_frames - 1}]")
+    genders = available_genders(model_path, kind) if gender == "auto" else [gender]
+    models = [load_model(model_path, g, kind) for g in (genders or ["neutral"])]
+    shapes = [fit_shape(m, body, n_betas, s) for m in models]
+    shape = min(shapes, key=lambda sh: sh.error_mm)  # the gender file that fits best
+    r = fit_frames(shape, body, clip, frames, s)
+    m = shape.model
+    return SMPLXFit(m.kind, m.gender, shape.betas, frames, r.pose, r.transl, r.pelvis, r.surface_mean_mm,
+                    r.surface_max_mm, r.joint_mm, threshold_mm, m.joint_names,
+                    meta={"model_file": m.path, "shape_error_mm": shape.error_mm, "n_betas": len(shape.betas)})

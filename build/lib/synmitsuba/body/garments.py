@@ -1,0 +1,442 @@
+"""Procedural garments: shells offset from body regions (tops, bottoms, dress, shoes) and a
+flared skirt surface; all bound to the body by closest-point weight transfer.
+
+Each garment has ``size`` (S..XL as 0..1, scales the ease), ``ease`` (looseness, metres),
+``length`` (0..1 along its range: hem height for tops, leg length for bottoms, sleeve length
+for sleeves) and ``thickness`` (metres). In the rest pose no garment vertex lies inside the body
+(vertices that would are pushed out along the surface normal) and layers nest: bottoms < tops <
+jackets in offset.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from synmitsuba.body.collide import neighbour_mean
+from synmitsuba.body.textures import GarmentTextureParams
+from synmitsuba.body.topology import cut, weld
+from synmitsuba.geometry import face_normals, vertex_normals
+from synmitsuba.schema import Choice, Nested, Number, Params, spec
+from synmitsuba.scene.layers import Layer
+
+CLEARANCE = 0.002
+# a top's slope going down (``drape``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
+# further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
+# and no inner garment hangs out through the one over it
+HANG = (0.85, 19.0, 0.014, 0.12)
+TUCK = 0.03  # metres under the waist a top worn with a skirt ends
+SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
+# a skirt's weights: from the hip line's own down to both legs' over this drop (metres), and a point
+# this share of its ring's radius to one side of the centre follows that side's leg alone
+LEGS_BLEND, LEGS_SIDE = 0.08, 0.7
+GROUPS = {
+    "torso": ("root", "pelvis", "spine", "clavicle", "shoulder01"),
+    "upperarm": ("upperarm",), "lowerarm": ("lowerarm",), "hand": ("wrist", "finger", "metacarpal"),
+    "upperleg": ("upperleg",), "lowerleg": ("lowerleg",), "foot": ("foot", "toe"),
+    "head": ("neck", "head", "eye"),
+}
+
+
+# -- body regions a garment covers: level-set fields over the rest body's vertices, in metres,
+# >= 0 where the garment covers. Garments are cut along the zero level (not along triangle
+# edges), so hems, cuffs and necklines follow smooth curves.
+def _top(sleeve: Callable[[float], float], dress: bool = False):
+    """Torso from the hem (by ``length``; a dress's bodice stops at the hips) to the neck, and
+    the arms to ``sleeve(length)`` (0 shoulder .. 1 wrist)."""
+    def region(g, r, v):
+        y = v[:, 1]
+        hem = r.waist_y - (r.waist_y - (r.crotch_y - 0.12)) * (0.6 if dress else g.length)
+        arms = np.isin(r.group, ["upperarm", "lowerarm", "hand"])
+        phi = np.where(arms, (sleeve(g.length) - r.arm_s) * r.arm_length, y - hem)
+        phi = np.minimum(phi, _neckline(r, v))
+        return np.minimum(phi, y - (r.hip_y - 0.02)) if dress else phi  # a dress's skirt is a flared surface
+    return region
+
+
+NECK_EASE = 0.012           # metres a neckline stands off the neck, around its base
+NECK_DROP = (0.012, 0.03)   # metres under the neck's base a neckline reaches at the back, at the front
+NECK_ROUND = 0.02           # metres over which the neckline turns from the front's dip to round the neck
+
+
+def _neckline(r, v: np.ndarray) -> np.ndarray:
+    """A crew neckline's field (>= 0 covered): a point is covered if it is farther than the
+    neck's radius and ``NECK_EASE`` from the neck's axis or lower than the neckline's lowest
+    reach (``NECK_DROP``, deeper at the front), and in any case not over 4 cm above the neck's
+    base (the union rounded over ``NECK_ROUND``, or the edge has a corner where it leaves the
+    dip). So the edge runs round the neck over the trapezius and dips onto the chest at the
+    front, and one field for every body group leaves no step where the torso meets the
+    shoulders (a level cut at the neck's height stepped there)."""
+    dx, dz = v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1]
+    rho = np.hypot(dx, dz)
+    front = np.clip(dz / np.maximum(rho, 1e-9), 0.0, 1.0)  # cos of the angle from straight ahead (+z)
+    low = r.neck_y - (NECK_DROP[0] + (NECK_DROP[1] - NECK_DROP[0]) * front)
+    a, b = rho - (r.neck_radius + NECK_EASE), low - v[:, 1]
+    either = 0.5 * (a + b + np.sqrt((a - b) ** 2 + NECK_ROUND ** 2))  # max(a, b), rounded where the two meet
+    return np.minimum(either, r.neck_y + 0.04 - v[:, 1])
+
+
+def _bottom(reach: Callable[[float], float]):
+    """Below the waist, the legs to ``reach(length)`` (0 hip .. 1 ankle)."""
+    def region(g, r, v):
+        legs = np.isin(r.group, ["upperleg", "lowerleg", "foot"])
+        phi = np.where(legs, (reach(g.length) - r.leg_s) * r.leg_length, np.where(r.group == "torso", 1.0, -1.0))
+        return np.minimum(phi, r.waist_y - v[:, 1])
+    return region
+
+
+def _feet(g, r, v):
+    """The feet and, by ``length``, the ankles."""
+    return (r.group == "foot") | ((r.group == "lowerleg") & (r.leg_s >= 1.0 - 0.08 * g.length))
+
+
+@dataclass(frozen=True)
+class GarmentKind:
+    """Everything a garment kind is. ``shape``: ``shell`` (the region offset from the body),
+    ``flare`` (a skirt surface from the waist), ``shell+flare`` (a dress: bodice + skirt) or
+    ``hull`` (convex hull of the region, for shoes). ``order``: dressing order, lower goes on
+    first and higher kinds sit outside it (shoes are separate)."""
+
+    layer: Layer
+    offset: float                 # base offset from the body surface, metres
+    order: int
+    shape: str
+    region: Callable | None       # (params, BodyRegions, vertices) -> level set (>= 0 covered); shoes: a mask
+    length: tuple[float, float]   # sampled length range
+    ease: tuple[float, float] = (0.0, 0.015)
+    thickness: tuple[float, float] = (0.002, 0.006)
+    fabric: str = "plain"         # textures.FABRICS: the thread-scale normal map a texture's weave "auto" takes
+
+
+# One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
+GARMENTS: dict[str, GarmentKind] = {
+    "tshirt": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.15 + 0.25 * L), (0.2, 0.7),
+                          fabric="jersey"),
+    "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8),
+                              fabric="jersey"),
+    "jacket": GarmentKind(Layer.TOP, 0.03, 3, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
+                          (0.005, 0.03), (0.002, 0.01), fabric="twill"),
+    "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
+                            fabric="twill"),
+    "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                              fabric="twill"),
+    "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03)),
+    "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
+                         (0.005, 0.03)),
+    "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none"),
+}
+KINDS = tuple(GARMENTS)
+# outfits sample_subject draws from (a jacket and shoes are added by chance)
+OUTFITS = (("tshirt", "trousers"), ("tshirt", "shorts"), ("longsleeve", "trousers"), ("tshirt", "skirt"),
+           ("longsleeve", "skirt"), ("dress",), ("longsleeve", "shorts"))
+
+
+@dataclass
+class GarmentParams(Params):
+    kind: str = spec("tshirt", Choice(GARMENTS))
+    size: float = spec(0.5, Number(0, 1), doc="S..XL as 0..1")
+    ease: float = spec(0.01, Number(0, 0.06), doc="looseness, metres")
+    length: float = spec(0.5, Number(0, 1), doc="along the kind's range")
+    thickness: float = spec(0.003, Number(0.0005, 0.02), doc="metres")
+    texture: GarmentTextureParams = spec(factory=GarmentTextureParams, check=Nested(GarmentTextureParams))
+
+
+def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
+    from synmitsuba.body.textures import sample_garment_texture
+    k = GARMENTS[kind]
+    return GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*k.ease)), 4),
+                         length=round(float(rng.uniform(*k.length)), 3),
+                         thickness=round(float(rng.uniform(*k.thickness)), 4), texture=sample_garment_texture(rng))
+
+
+@dataclass
+class BodyRegions:
+    """Per-vertex group names and landmark heights of a shaped rest body."""
+
+    group: np.ndarray        # (V,) group name per vertex
+    normals: np.ndarray
+    arm_s: np.ndarray        # (V,) 0 at the shoulder .. 1 at the wrist (arm and hand vertices)
+    leg_s: np.ndarray        # (V,) 0 at the hip .. 1 at the ankle (leg and foot vertices)
+    arm_length: float        # shoulder to wrist, metres
+    leg_length: float        # hip to ankle, metres
+    waist_y: float
+    hip_y: float
+    crotch_y: float
+    neck_y: float
+    neck_xz: tuple = (0.0, 0.0)  # the neck's axis (x, z) just above its base
+    neck_radius: float = 0.06    # and its radius there (75th percentile: the outer surface)
+
+
+def body_regions(body) -> BodyRegions:
+    sk = body.skeleton
+    bones = np.array([next((g for g, keys in GROUPS.items() if any(k in name for k in keys)), "torso")
+                      for name in sk.names])
+    group = bones[body.weights.argmax(1)]
+    v = body.vertices
+    arm_s = np.zeros(len(v))
+    leg_s = np.zeros(len(v))
+    arm_len, leg_len = [], []
+    for side in ("L", "R"):
+        sh, wr = sk.rest_positions[sk.index(f"upperarm01.{side}")], sk.rest_positions[sk.index(f"wrist.{side}")]
+        axis = wr - sh
+        arm = np.isin(group, ["upperarm", "lowerarm", "hand"]) & ((v[:, 0] > 0) == (side == "L"))
+        arm_s[arm] = ((v[arm] - sh) @ axis) / (axis @ axis)
+        hip, ank = sk.rest_positions[sk.index(f"upperleg01.{side}")], sk.rest_positions[sk.index(f"foot.{side}")]
+        leg = np.isin(group, ["upperleg", "lowerleg", "foot"]) & ((v[:, 0] > 0) == (side == "L"))
+        leg_s[leg] = (hip[1] - v[leg, 1]) / (hip[1] - ank[1])
+        arm_len.append(np.linalg.norm(axis))
+        leg_len.append(hip[1] - ank[1])
+    hip_y = float(sk.rest_positions[sk.index("upperleg01.L"), 1])
+    neck_y = float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01
+    ring = v[(group == "head") & (np.abs(v[:, 1] - neck_y - 0.03) < 0.01)][:, [0, 2]]
+    centre = ring.mean(0)
+    return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s, float(np.mean(arm_len)), float(np.mean(leg_len)),
+                       waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y, crotch_y=hip_y - 0.07,
+                       neck_y=neck_y, neck_xz=(float(centre[0]), float(centre[1])),
+                       neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)))
+
+
+def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, n_seg: int = 48):
+    """A skirt surface from top_y down, flaring outwards, outside every body vertex it passes."""
+    v = body.vertices[np.isin(r.group, ["torso", "upperleg", "lowerleg"])]  # not the hanging arms
+    bottom = r.hip_y - 0.1 - (r.hip_y - 0.1 - 0.15) * g.length
+    heights = np.linspace(top_y, bottom, 14)
+    centre = v[(v[:, 1] < top_y) & (v[:, 1] > bottom)][:, [0, 2]].mean(0)
+    ang = np.linspace(0, 2 * np.pi, n_seg, endpoint=False)
+    d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
+    rings = []
+    prev = None
+    for k, h in enumerate(heights):
+        band = v[np.abs(v[:, 1] - h) < 0.03][:, [0, 2]] - centre
+        reach = np.array([(band @ di).max() if len(band) else 0.05 for di in d])
+        # the support of the body in each direction; smooth it around the ring
+        reach = np.maximum(reach, np.convolve(np.pad(reach, 3, mode="wrap"), np.ones(7) / 7, "valid"))
+        radius = reach + offset + (0.06 + 0.4 * g.ease) * (k / (len(heights) - 1)) ** 1.3
+        if prev is not None:
+            radius = np.maximum(radius, prev)  # never narrows downwards
+        prev = radius
+        rings.append(np.column_stack([centre[0] + radius * d[:, 0], np.full(n_seg, h), centre[1] + radius * d[:, 1]]))
+    verts = np.concatenate(rings)
+    faces = []
+    for k in range(len(heights) - 1):
+        for j in range(n_seg):
+            a, b = k * n_seg + j, k * n_seg + (j + 1) % n_seg
+            c, e = a + n_seg, b + n_seg
+            faces += [[a, c, b], [b, c, e]]
+    uv = np.column_stack([np.tile(ang / (2 * np.pi), len(heights)), np.repeat(np.linspace(1, 0, len(heights)), n_seg)])
+    return verts, np.array(faces), uv
+
+
+def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
+    """Each shoe is the convex hull of its foot (and ankle, by ``length``), grown by ``offset``
+    and subdivided; a convex shell cannot cut into the toes. UVs by cylindrical projection."""
+    import trimesh
+    keep = GARMENTS["shoes"].region(g, r, body.vertices)
+    parts = []
+    for side in (1, -1):
+        pts = body.vertices[keep & (np.sign(body.vertices[:, 0]) == side)]
+        hull = trimesh.convex.convex_hull(pts)
+        n = hull.vertex_normals
+        grown = trimesh.Trimesh(hull.vertices + n * offset, hull.faces, process=False)
+        v, f = trimesh.remesh.subdivide_to_size(grown.vertices, grown.faces, max_edge=0.02)
+        parts.append((v, f))
+    v = np.concatenate([parts[0][0], parts[1][0]])
+    f = np.concatenate([parts[0][1], parts[1][1] + len(parts[0][0])])
+    c = v.mean(0)
+    uv = np.column_stack([(np.arctan2(v[:, 0] - c[0], v[:, 2] - c[2]) / (2 * np.pi)) % 1.0, v[:, 1] / 0.3])
+    return v, f, uv
+
+
+def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int = 3) -> np.ndarray:
+    """Move points that are inside or closer than ``clearance`` to the body out along the normal."""
+    p, surface = points.copy(), body.surface()
+    for _ in range(rounds):
+        d = surface.signed_distance(p)
+        bad = d < clearance
+        if not bad.any():
+            break
+        closest, tri, _ = surface.closest(p[bad])
+        n = face_normals(body.vertices[body.faces[tri]])
+        p[bad] = closest + n * clearance * 1.5
+    return p
+
+
+def _cut_shell(body, r: BodyRegions, split, phi: np.ndarray, offset: float):
+    """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along the
+    normals: (vertices, faces, uv)."""
+    src = split.source
+    f, p, n, uv = cut(split.faces, phi[src], body.vertices[src], r.normals[src], split.uv)
+    return p + n / np.linalg.norm(n, axis=1, keepdims=True) * offset, f, uv
+
+
+@dataclass
+class GarmentMesh:
+    params: GarmentParams
+    vertices: np.ndarray
+    faces: np.ndarray
+    uv: np.ndarray
+    layer: int
+    offset: float
+    hem: tuple = (0, 0)  # (faces, vertices) the turned-in band appended last
+
+
+def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
+    size = 0.7 + 0.6 * g.size
+    fit = 0.004 * g.size  # a larger size sits further out even with no ease
+    return max(GARMENTS[g.kind].offset + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
+
+
+def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0,
+                  tuck: bool = False) -> GarmentMesh:
+    """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology.
+    ``tuck``: a top worn with a skirt ends ``TUCK`` under the waist, as if tucked in (its hem
+    would otherwise run inside the skirt's flare and show through it in notches)."""
+    kind = GARMENTS[g.kind]
+    offset = garment_offset(g, below)
+    shape = g
+    if tuck and kind.layer == Layer.TOP:
+        shape = dataclasses.replace(g, length=min(g.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
+    if kind.shape == "flare":
+        v, f, uv = _flare(body, r, g, offset, r.waist_y)
+    elif kind.shape == "hull":
+        v, f, uv = _shoes(body, r, g, offset)
+    else:
+        v, f, uv = _cut_shell(body, r, split, kind.region(shape, r, body.vertices), offset)
+        v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
+        if kind.layer in (Layer.TOP, Layer.DRESS):
+            slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
+            v = drape(v, f, _over_torso(body, r, v), slope)
+        if kind.shape == "shell+flare":
+            sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
+            f = np.concatenate([f, sf + len(v)])
+            v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
+    n_faces, n_vertices = len(f), len(v)
+    if kind.shape != "hull":
+        v, f, uv = hem(body, v, f, uv, g.thickness)
+    v = push_out(body, v)
+    return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
+
+
+def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Skinning weights for a skirt (or a dress's skirt) that hangs from the hips over both legs.
+    Closest-point binding gives each point one leg, so a stride tears the front and back apart
+    along where the binding switches legs and drives the hem between the knees into one of them.
+    Below the hips, a point takes the weights at its closest point on the body's left half and
+    on its right half, mixed by how far to that side it is (half and half at the front and back
+    centre, one leg alone from ``LEGS_SIDE`` of the ring's radius out), blended in from the hip
+    line over ``LEGS_BLEND``."""
+    from synmitsuba.body.binding import MeshIndex
+    down = np.clip((r.hip_y - v[:, 1]) / LEGS_BLEND, 0.0, 1.0)
+    rows = np.flatnonzero(down > 0)
+    if not len(rows):
+        return weights
+    legs = np.isin(r.group, ["torso", "upperleg", "lowerleg"])
+    cx, cz = body.vertices[legs & (body.vertices[:, 1] < r.hip_y), :][:, [0, 2]].mean(0)
+    p = v[rows]
+    side_w = []
+    for side in (1.0, -1.0):  # each half: its vertices, and the faces with all three among them
+        keep = side * (body.vertices[:, 0] - cx) >= 0.0
+        faces = body.faces[keep[body.faces].all(1)]
+        index = np.cumsum(keep) - 1
+        half = MeshIndex(body.vertices[keep], index[faces])
+        _, tri, bary = half.closest(p)
+        side_w.append(np.einsum("nk,nkj->nj", bary, body.weights[faces[tri]]))
+    radius = np.maximum(np.hypot(p[:, 0] - cx, p[:, 2] - cz), 1e-6)
+    s = np.clip(0.5 + 0.5 * (p[:, 0] - cx) / (LEGS_SIDE * radius), 0.0, 1.0)[:, None]
+    mixed = s * side_w[0] + (1 - s) * side_w[1]
+    out = weights.astype(np.float64).copy()
+    t = down[rows, None]
+    out[rows] = (1 - t) * out[rows] + t * mixed
+    out /= np.maximum(out.sum(1, keepdims=True), 1e-12)
+    return out.astype(weights.dtype)
+
+
+def metres_per_uv(v: np.ndarray, f: np.ndarray, uv: np.ndarray) -> tuple[float, float]:
+    """Metres of surface per unit u and per unit v of a mesh's texture mapping (the area-weighted
+    median of each face's |dp/du| and |dp/dv|): how many thread tiles a garment's uv square holds."""
+    e1, e2 = v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]
+    d1, d2 = uv[f[:, 1]] - uv[f[:, 0]], uv[f[:, 2]] - uv[f[:, 0]]
+    det = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    ok = np.abs(det) > 1e-12
+    inv = 1.0 / np.where(ok, det, 1.0)
+    dpdu = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * inv[:, None]
+    dpdv = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * inv[:, None]
+    area = np.linalg.norm(np.cross(e1, e2), axis=1) * ok
+
+    def median(x):
+        order = np.argsort(x)
+        c = np.cumsum(area[order])
+        return float(x[order][np.searchsorted(c, c[-1] / 2)]) if c[-1] > 0 else 1.0
+    return median(np.linalg.norm(dpdu, axis=1)), median(np.linalg.norm(dpdv, axis=1))
+
+
+def _over_torso(body, r: BodyRegions, v: np.ndarray) -> np.ndarray:
+    """(N,) True for shell points whose closest body vertex is on the torso (not the arms)."""
+    return r.group[body.surface().tree.query(v)[1]] == "torso"
+
+
+def open_edges(f: np.ndarray, merged: np.ndarray | None = None) -> np.ndarray:
+    """(E, 2) directed edges a -> b (as their face winds them) that only one face has, on the
+    vertices ``merged`` (``weld``) makes one: the garment's openings."""
+    directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    merged = np.arange(f.max() + 1) if merged is None else merged
+    m = np.sort(merged[directed], 1)
+    _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
+    return directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]
+
+
+def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, rounds: int = 40,
+          soften: int = SOFTEN) -> np.ndarray:
+    """Cloth that hangs: going down an edge, a ``hanging`` vertex may come in towards the body
+    by at most ``slope`` times the drop (measured along its horizontal outward normal), so a
+    loose top falls from the chest and the shoulder blades over the underbust, the navel and
+    the small of the back instead of following them like paint (a shell offset along the
+    normals keeps every hollow of the skin). ``rounds`` edges is how far a hang reaches; then
+    ``soften`` rounds of averaging the lift over neighbours round the ledge it leaves. Seam
+    copies of a vertex (the render topology splits at UV seams) move as one: no crack opens."""
+    rep = weld(v)
+    ff = rep[f]
+    edges = np.unique(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]), axis=0)
+    p = v[rep].copy()
+    up = np.where((p[edges[:, 0], 1] > p[edges[:, 1], 1])[:, None], edges, edges[:, ::-1])  # (upper, lower)
+    up = up[hanging[rep][up].all(1)]  # hanging from hanging cloth: a sleeve is no torso's rail
+    n = vertex_normals(p, ff)
+    n[:, 1] = 0.0
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
+    a, b = up.T
+    out = np.zeros(len(p))  # how far each vertex moves out along n
+    for _ in range(rounds):
+        q = p + out[:, None] * n
+        need = np.einsum("ij,ij->i", q[a] - q[b], n[b]) - slope * (q[a, 1] - q[b, 1])
+        lift = np.zeros(len(p))
+        np.maximum.at(lift, b, need)
+        if lift.max() <= 1e-5:
+            break
+        out += np.clip(lift, 0.0, None)
+    mean = neighbour_mean(ff, len(p))
+    for _ in range(soften):  # where the fall leaves the chest, a rounded fold, not a ledge
+        out = mean @ out
+    return (p + out[:, None] * n)[rep]
+
+
+def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
+    """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
+    thickness) deep towards the closest body point, so an edge seen in a close-up has thickness.
+    Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
+    the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
+    edge = open_edges(f, weld(v))
+    if not len(edge):
+        return v, f, uv
+    ends = np.unique(edge)
+    closest = body.surface().closest(v[ends])[0]
+    gap = np.linalg.norm(v[ends] - closest, axis=1, keepdims=True)
+    towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9),  # on the body: the cloth's normal
+                       vertex_normals(v, f)[ends])
+    inner = -np.ones(len(v), np.int64)
+    inner[ends] = len(v) + np.arange(len(ends))
+    a, b = edge.T
+    band = np.concatenate([np.stack([b, a, inner[a]], 1), np.stack([b, inner[a], inner[b]], 1)])
+    return (np.concatenate([v, v[ends] - towards * depth]), np.concatenate([f, band]),
+            np.concatenate([uv, uv[ends]]))

@@ -1,0 +1,329 @@
+"""``LayeredHuman``: a built recipe — body, garments, hair, accessories — posed on the CPU by
+linear blend skinning and exported to a scene with one instance id and a layer id per layer."""
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.body import accessories as acc
+from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
+from synmitsuba.body.binding import bind
+from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
+from synmitsuba.body.garments import (GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights, build_garment,
+                                      garment_offset, metres_per_uv)
+from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
+                                  limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
+from synmitsuba.body.lbs import bone_transforms, skin
+from synmitsuba.body.recipe import SubjectRecipe
+from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
+                                      skin_material)
+from synmitsuba.body.topology import split_at_seams, weld
+from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import SmoothNormals, vertex_normals
+from synmitsuba.scene.layers import Layer
+from synmitsuba.scene.materials import Material
+
+
+@dataclass
+class PosedLayer:
+    """One posed layer: a mesh (vertices, faces, uv) or curves (points, radius)."""
+
+    name: str
+    layer: int
+    material: Material
+    vertices: np.ndarray | None = None
+    faces: np.ndarray | None = None
+    uv: np.ndarray | None = None
+    points: np.ndarray | None = None
+    radius: np.ndarray | None = None
+
+    @property
+    def is_curves(self) -> bool:
+        return self.points is not None
+
+
+@dataclass
+class _Part:
+    name: str
+    layer: int
+    material: Material
+    rest: np.ndarray
+    faces: np.ndarray
+    uv: np.ndarray
+    weights: np.ndarray
+    collider: GarmentCollider | None = None  # garments: pushed out of the posed body each frame
+    inner: bool = False                      # a garment that a later garment is pushed out of
+
+    @functools.cached_property
+    def skinning_weights(self):
+        """``weights`` as a sparse matrix (2-5 bones a vertex of 104): skinning the body takes
+        a quarter of the dense product's time, with the same result."""
+        from scipy import sparse
+        return sparse.csr_matrix(self.weights)
+
+
+SCALP_TINT = 0.9  # how far the skin under hair takes the hair's colour
+BEARD_TINT = 0.5  # and under a beard: a shadow, the skin still shows
+
+
+def skin_size(texture_size: int) -> int:
+    """The skin's texture side: twice the garments' (the body's atlas holds the whole body),
+    at most 1024 (a 2048-px skin took 3 s and 64 MB a subject)."""
+    return min(2 * texture_size, 1024)
+
+
+def body_margin(offset: float) -> float:
+    """What a garment keeps from the posed body: half its rest offset, within 2-6 mm."""
+    return float(np.clip(0.5 * offset, 0.002, 0.006))
+
+
+class LayeredHuman:
+    """Build with ``build_subject(recipe)``; pose with local rotations on ``skeleton``."""
+
+    def __init__(self, recipe: SubjectRecipe):
+        if recipe.model != "anny":
+            raise ConfigError("recipe.model", recipe.model, "layered subjects need the anny body; use "
+                              "synmitsuba.body.smplx_model.smplx_body for a bare SMPL-X body")
+        self.recipe = recipe
+        body = anny_body(recipe.phenotypes)
+        self.regions: BodyRegions = body_regions(body)
+        shoes = [g for g in recipe.garments if g.kind == "shoes"]
+        lift = garment_offset(shoes[0]) if shoes else 0.0  # the shoe soles stand on the ground
+        body.vertices = body.vertices + [0, lift, 0]
+        body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
+                                            body.skeleton.rest_positions + [0, lift, 0])
+        self.body: BodyMesh = body
+        self.split = split_at_seams(body.faces, body.face_uv, body.uv)
+        self._incidence = incidence(body.faces, len(body.vertices))
+        self._around = body.surface().around
+        size = recipe.texture_size
+        self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin_material(recipe.skin, anny_uv_masks(skin_size(size)), skin_size(size)),
+                                         body.vertices[self.split.source], self.split.faces, self.split.uv,
+                                         body.weights[self.split.source])]
+        self.garments: list[GarmentMesh] = []
+        below = 0.0
+        for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
+            m = build_garment(body, self.regions, self.split, g, below if g.kind != "shoes" else 0.0,
+                              tuck=any(x.kind == "skirt" for x in recipe.garments))
+            if g.kind != "shoes":
+                below = max(below, m.offset)
+            self.garments.append(m)
+            b = bind(body.vertices, body.faces, body.weights, m.vertices, body.surface())
+            kind = GARMENTS[g.kind]
+            weights = both_legs_weights(body, self.regions, m.vertices, b.weights) if "flare" in kind.shape else b.weights
+            material = garment_material(g.texture, size, fabric=kind.fabric,
+                                        metres_per_uv=metres_per_uv(m.vertices, m.faces, m.uv))
+            collider = GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset), body.faces[b.triangle],
+                                       b.barycentric)
+            self.parts.append(_Part(g.kind, m.layer, material, m.vertices, m.faces, m.uv, weights, collider))
+        garments = self.parts[1:]
+        for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
+            part.inner = part.name != "shoes" and any(q.name != "shoes" for q in garments[k + 1:])
+        self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
+        self._build_head_and_hair()
+        self._build_accessories()
+        self.hair_shade = strand_melanin(self.recipe.hair, len(self.hair))  # per strand, once: pose() reuses it
+        self.hair_weights = self._hair_weights()
+        self._tint_scalp()
+        self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
+
+    # -- construction ---------------------------------------------------------------------
+    def _build_head_and_hair(self) -> None:
+        body, sk = self.body, self.body.skeleton
+        labels = part_labels(body)
+        head = labels == 1
+        hv = body.vertices[head]
+        skull = hv[hv[:, 1] > sk.rest_positions[sk.index("head"), 1]]  # above the skull base
+        lo, hi = skull.min(0), skull.max(0)
+        centre = np.array([(lo[0] + hi[0]) / 2, lo[1] + 0.45 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2])
+        kp, names = body.keypoint_weights @ body.vertices, list(body.keypoint_labels)
+        self.head = {"centre": centre, "up": np.array([0, 1.0, 0]), "forward": np.array([0, 0, 1.0]),
+                     "radii": (hi - lo) / 2, "mask": head,
+                     "eyes": kp[[names.index("left_eye"), names.index("right_eye")]], "nose": kp[names.index("nose")],
+                     "ears": kp[[names.index("left_ear"), names.index("right_ear")]]}
+        self.head["chin"] = acc.under_chin(body.vertices, self.head)
+        idx = np.flatnonzero(head)
+        remap = -np.ones(len(body.vertices), np.int64)
+        remap[idx] = np.arange(len(idx))
+        f = remap[body.faces]
+        f = f[(f >= 0).all(1)]
+        normals = vertex_normals(body.vertices, body.faces)[idx]
+        scalp = scalp_regions_from_head(hv, normals, f, centre, [0, 1, 0], [0, 0, 1])
+        self.scalp = scalp
+        surface = Surface.of(body.vertices, body.faces, self._incidence)
+        reachable = np.linalg.norm(body.vertices - centre, axis=1) < (hi - lo).max() / 2 + reach(self.recipe.hair)
+        self.hair_lift = cover_heights(body.vertices, surface.normals,
+                                       [(p.rest, p.faces) for p in self.parts[1:] if p.name != "shoes"], reachable)
+        self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head["ears"])
+        self.head_bone = sk.index("head")
+
+    def _build_accessories(self) -> None:
+        from scipy.spatial import cKDTree
+        tree = cKDTree(self.body.vertices)
+        for i, p in enumerate(self.recipe.accessories):
+            v, f = acc.build_accessory(p, self.body, self.head)
+            _, near = tree.query(v)
+            colour = lab_to_linear_rgb(p.colour_lab) if p.colour_lab else (0.1, 0.1, 0.1)
+            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4,
+                           metallic=0.0 if p.kind != "watch" else 0.8)
+            uv = None
+            if p.kind == "mask":  # matte cloth with a plain weave at thread size
+                uv, metres = acc.mask_uv(self.head, v)
+                mat = dataclasses.replace(mat, roughness=0.9, normal_map=fabric_normal_map("plain"),
+                                          normal_map_repeat=fabric_repeat("plain", metres))
+            self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, uv, self.body.weights[near]))
+            if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
+                self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
+            if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
+                beard = self.hair.region >= 5  # (scalp regions are 0-4)
+                self.hair = self.hair.subset(~(beard & acc.mask_covers(self.head, self.hair.points[:, 0])))
+
+    def _hair_weights(self):
+        """The strands' skinning weights (``hair.follow_weights``): nearest body vertex's below the neck."""
+        body_weights = self.parts[0].skinning_weights  # on the body split at seams: rows via split.source
+        tree = self.body.surface().tree
+        row = np.zeros(len(self.body.vertices), np.int64)
+        row[self.split.source] = np.arange(len(self.split.source))
+
+        def near_weights(points):
+            return body_weights[row[tree.query(points)[1]]]
+        sk = self.skeleton
+        return follow_weights(self.hair, sk.rest_positions[self.head_bone], self.head_bone, near_weights)
+
+    def _tint_scalp(self) -> None:
+        """The skin under the hair takes the hair's colour, ``SCALP_TINT`` of the way (``BEARD_TINT``
+        under a beard): real hair is dense enough that no skin shows between strands; ours is not."""
+        if not len(self.hair):
+            return
+        body, mat = self.body, self.parts[0].material
+        head = np.flatnonzero(self.head["mask"])
+        cover = np.zeros(len(body.vertices))
+        beard = self.hair.region == 5
+        cover[head] = np.maximum(SCALP_TINT * root_cover(body.vertices[head], self.hair.points[~beard, 0]),
+                                 BEARD_TINT * root_cover(body.vertices[head], self.hair.points[beard, 0]))
+        texture = paint_uv(mat.texture, body.uv, body.face_uv, cover[body.faces], hair_colour(self.recipe.hair),
+                           blur=mat.texture.shape[0] / 512)
+        self.parts[0].material = dataclasses.replace(mat, texture=texture)
+
+    # -- posing ---------------------------------------------------------------------------
+    @property
+    def skeleton(self):
+        return self.body.skeleton
+
+    def _transforms(self, rotations, root_translation):
+        if rotations is not None:
+            rotations = np.asarray(rotations, dtype=np.float64)
+            if rotations.shape != (len(self.skeleton), 3, 3):
+                raise ConfigError("rotations", f"array{rotations.shape}", f"expected ({len(self.skeleton)}, 3, 3)")
+        return bone_transforms(self.skeleton, rotations, root_translation)
+
+    def pose(self, rotations=None, root_translation=None, resolve: bool = True) -> list[PosedLayer]:
+        """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,); with
+        ``resolve`` garments are pushed out of the posed body and of the garments under them
+        (``body.collide``)."""
+        T = self._transforms(rotations, root_translation)
+        key = (T[0].tobytes(), T[1].tobytes(), resolve)
+        if key in self._posed:  # same arrays, new records: nothing downstream writes into them
+            return [dataclasses.replace(layer) for layer in self._posed[key]]
+        out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest, p.skinning_weights, T), p.faces, p.uv)
+               for p in self.parts]
+        surface = self._resolve(out) if resolve else None
+        if len(self.hair):
+            hair = dataclasses.replace(self.hair, points=self._pose_strands(T, surface))
+            scalp = hair.region < 5
+            shade = self.hair_shade
+            if scalp.any():
+                out.append(PosedLayer("hair", int(Layer.HAIR), hair_material(self.recipe.hair, shade[scalp]),
+                                      points=hair.points[scalp], radius=hair.radius[scalp]))
+            if (~scalp).any():
+                out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair, shade[~scalp]),
+                                      points=hair.points[~scalp], radius=hair.radius[~scalp]))
+        if len(self._posed) >= 4:  # the current frame and its neighbours
+            self._posed.pop(next(iter(self._posed)))
+        self._posed[key] = out
+        return [dataclasses.replace(layer) for layer in out]
+
+    def _pose_strands(self, T, surface: Surface | None) -> np.ndarray:
+        """Skinned strands (N, K, 3); with the posed body's ``surface``, scalp strands that
+        stretched are shortened (``hair.limit_stretch``) and their points kept off the body and
+        the garments over it (``hair_lift``): pulled back towards a turned head they would cut
+        into the neck and shoulders."""
+        pts = skin(self.hair.points.reshape(-1, 3), self.hair_weights, T).reshape(self.hair.points.shape)
+        if surface is None:
+            return pts
+        scalp = np.flatnonzero(self.hair.region < 5)
+        shell = surface.lifted(self.hair_lift)
+
+        def clear(q: np.ndarray) -> np.ndarray:
+            height, normals = shell.depth(q)  # the nearest vertex's tangent plane: a garment's test is
+            # exact where it matters, for hair a few millimetres do not show
+            return q + np.clip(HAIR_CLEARANCE - height, 0.0, None)[:, None] * normals
+
+        pts[scalp] = limit_stretch(pts[scalp], self._strand_rest, clear)
+        return pts
+
+    @functools.cached_property
+    def _strand_rest(self) -> np.ndarray:
+        """Rest lengths (N, K - 1) of the scalp strands' segments."""
+        seg = np.diff(self.hair.points[self.hair.region < 5], axis=1)
+        return np.sqrt(np.einsum("nki,nki->nk", seg, seg))
+
+    def _resolve(self, layers: list[PosedLayer], calibrate: bool = False) -> Surface:
+        """Garments (inner first) out of the posed body, then out of the garments under them;
+        returns the posed body's surface."""
+        body = np.empty_like(self.body.vertices)
+        body[self.split.source] = layers[0].vertices
+        surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), []
+        for part, layer in zip(self.parts, layers):
+            if part.collider is None:
+                continue
+            layer.vertices = part.collider.resolve(layer.vertices, surface, inner, calibrate)
+            if part.inner:
+                inner.append(Surface.of(layer.vertices, layer.faces, part.collider.incidence))
+        return surface
+
+    def keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
+        """COCO-17 + 6 foot keypoints (23, 3), world metres, from anny's regressor."""
+        T = self._transforms(rotations, root_translation)
+        return self.body.keypoint_weights @ skin(self.body.vertices, self.body.weights, T)
+
+    def add_to(self, scene, rotations=None, root_translation=None, instance: int = 1, prefix: str | None = None):
+        """Add (or, when already there, move) every layer in ``scene`` as ``<prefix>_<layer>``."""
+        prefix = prefix or f"subject{instance}"
+        for layer in self.pose(rotations, root_translation):
+            name = f"{prefix}_{layer.name}"
+            if layer.is_curves:
+                if name in scene.curves:
+                    scene.update_curves(name, layer.points)
+                else:
+                    scene.add_curves(name, layer.points, layer.radius, material=layer.material, instance=instance,
+                                     layer=layer.layer)
+            elif name in scene.meshes:  # a copy held for visibility tests (flow) has no normals to move
+                shaded = scene.meshes[name].normals is not None
+                scene.update_mesh(name, layer.vertices, self._normals(layer.name)(layer.vertices) if shaded else None)
+            else:
+                scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv,
+                               normals=self._normals(layer.name)(layer.vertices), material=layer.material,
+                               instance=instance, layer=layer.layer)
+        return scene
+
+    def _normals(self, part: str) -> SmoothNormals:
+        """A part's ``SmoothNormals`` over ``topology.weld`` of its rest vertices (the body and
+        garments are split along their uv seams), made once: the rendered normals are smooth
+        across the seams. Without normals Mitsuba shades every triangle flat, and anny's 2-4 cm
+        triangles showed in a close-up."""
+        made = self.__dict__.setdefault("_smooth_normals", {})
+        if part not in made:
+            p = next(p for p in self.parts if p.name == part)
+            made[part] = SmoothNormals(p.faces, weld(p.rest), p.rest)
+        return made[part]
+
+
+def build_subject(recipe: SubjectRecipe) -> LayeredHuman:
+    """Build the layered human a recipe describes (deterministic)."""
+    if not isinstance(recipe, SubjectRecipe):
+        raise ConfigError("recipe", type(recipe).__name__, "give a SubjectRecipe (sample_subject or from_json)")
+    return LayeredHuman(recipe)

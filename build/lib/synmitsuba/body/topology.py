@@ -1,0 +1,86 @@
+"""Render topology: split body vertices at UV seams, keep a map back to the original vertices."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class SplitMesh:
+    source: np.ndarray   # (V', ) index of the original vertex for each render vertex
+    uv: np.ndarray       # (V', 2)
+    faces: np.ndarray    # (F, 3) into render vertices
+
+
+def split_at_seams(faces: np.ndarray, face_uv: np.ndarray, uv: np.ndarray) -> SplitMesh:
+    pairs = np.stack([faces.ravel(), face_uv.ravel()], 1)
+    unique, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    return SplitMesh(unique[:, 0], uv[unique[:, 1]], inverse.reshape(-1, 3))
+
+
+def submesh(faces: np.ndarray, keep_vertex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Faces whose three vertices are kept, re-indexed; returns (vertex indices, faces)."""
+    f = faces[keep_vertex[faces].all(1)]
+    used = np.unique(f)
+    remap = -np.ones(len(keep_vertex), np.int64)
+    remap[used] = np.arange(len(used))
+    return used, remap[f]
+
+
+def clip_faces(faces: np.ndarray, phi: np.ndarray, snap: float = 0.02):
+    """Cut a triangle mesh along the level set ``phi == 0`` and keep ``phi >= 0``: triangles
+    crossing it are split on their edges (marching triangles), so the boundary follows the
+    smooth curve instead of the triangles' edges. Returns ``(faces, pairs, t)``: faces index the
+    original vertices, then one new vertex per cut edge, ``(1 - t) * v[pairs[:, 0]] + t *
+    v[pairs[:, 1]]``. ``t`` is kept within [snap, 1 - snap] so no sliver is left."""
+    faces = np.asarray(faces)
+    V = len(phi)
+    inside = phi[faces] >= 0
+    count = inside.sum(1)
+    out = [faces[count == 3]]
+    cut = faces[(count == 1) | (count == 2)]
+    ins = inside[(count == 1) | (count == 2)]
+    # rotate each cut face so that its odd vertex (alone on its side) comes first
+    odd = np.where(ins.sum(1) == 1, np.argmax(ins, 1), np.argmin(ins, 1))
+    rot = np.stack([cut[np.arange(len(cut)), (odd + k) % 3] for k in range(3)], 1)
+    a, b, c = rot.T
+    edges = np.concatenate([np.stack([a, b], 1), np.stack([c, a], 1)])
+    key = np.sort(edges, 1)
+    pairs, index = np.unique(key, axis=0, return_inverse=True)
+    index = index.ravel()
+    p_ab, p_ca = V + index[:len(a)], V + index[len(a):]
+    one = ins.sum(1) == 1  # the odd vertex is the one kept
+    out.append(np.stack([a, p_ab, p_ca], 1)[one])
+    two = ~one
+    out += [np.stack([p_ab, b, c], 1)[two], np.stack([p_ab, c, p_ca], 1)[two]]
+    fa, fb = phi[pairs[:, 0]], phi[pairs[:, 1]]
+    t = np.clip(fa / (fa - fb), snap, 1 - snap)
+    return np.concatenate(out), pairs, t
+
+
+def cut(faces: np.ndarray, phi: np.ndarray, *attributes: np.ndarray):
+    """``clip_faces`` with per-vertex ``attributes`` (positions, normals, uv, ...) interpolated
+    onto the cut and every array compacted to the vertices kept: (faces, attribute, ...)."""
+    f, pairs, t = clip_faces(faces, phi)
+    used = np.unique(f)
+    remap = -np.ones(len(phi) + len(pairs), np.int64)
+    remap[used] = np.arange(len(used))
+    out = [np.concatenate([a, (1 - t)[:, None] * a[pairs[:, 0]] + t[:, None] * a[pairs[:, 1]]])[used]
+           for a in attributes]
+    return (remap[f], *out)
+
+
+def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """A representative index per vertex: vertices within ``tol`` (chains of them) share one,
+    the lowest of the group; unlike rounding, no grid splits two close points."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+    n = len(vertices)
+    pairs = cKDTree(vertices).query_pairs(tol, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1]
+    first = np.full(labels.max() + 1, n)
+    np.minimum.at(first, labels, np.arange(n))
+    return first[labels]

@@ -1,0 +1,30 @@
+"""``synmitsuba stats DIR``: what a generated dataset holds, as a PNG of histograms and a JSON."""
+from __future__ import annotations
+
+import json
+import os
+
+
+def run(args) -> int:
+    from synmitsuba.data.stats import dataset_stats, stats_figure, summarise
+    from synmitsuba.io.preview import atomic_path
+    stats = dataset_stats(args.dataset)
+    png = args.out or os.path.join(args.dataset, "stats.png")
+    print(stats_figure(stats, png))
+    path = os.path.splitext(png)[0] + ".json"
+    with atomic_path(path) as tmp, open(tmp, "w") as fh:
+        json.dump(summarise(stats), fh, indent=1)
+    print(path)
+    print(f"{stats['sequences']} sequences, {stats['subjects']} subjects, {stats['frames']} frames, "
+          f"{stats['samples']} images, {stats['views']} views")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("stats", help="counts and histograms of a generated dataset (PNG + JSON)",
+                       description="Counts of sequences, subjects, frames and views, and histograms of visible "
+                       "fraction, keypoint visibility, subject height, camera distance and pitch, skin tone (ITA), "
+                       "garment kinds and motions: DIR/stats.png and DIR/stats.json.")
+    p.add_argument("dataset", help="a folder synmitsuba generate wrote")
+    p.add_argument("--out", help="PNG to write (default: DATASET/stats.png; the JSON goes beside it)")
+    p.set_defaults(func=run)

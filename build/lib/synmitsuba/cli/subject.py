@@ -1,0 +1,96 @@
+"""``synmitsuba subject --seed N --out DIR``: a turntable of one sampled subject (PNG views, EXR
+samples with every pass, the recipe JSON, a contact image); ``--sheet K`` instead renders K
+random subjects into one contact sheet (``--closeup``: head and shoulders, as HMR crops and
+human NeRF views see them)."""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, output_file, positive_int, resolution
+
+# layer id -> preview colour (background, body, top, bottom, dress, shoes, hair, beard, accessory, object, ground)
+LAYER_COLOURS = np.array([[0, 0, 0], [230, 190, 160], [200, 40, 40], [40, 80, 200], [180, 60, 180], [40, 40, 40],
+                          [120, 80, 30], [90, 60, 20], [40, 200, 200], [200, 200, 40], [110, 110, 110]], np.uint8)
+
+
+def _camera(human, angle_deg: float, w: int, h: int):
+    from synmitsuba.scene.camera import Camera
+    top = human.body.vertices[:, 1].max()
+    a = np.radians(angle_deg)
+    dist = 1.15 * top / np.tan(np.radians(35) / 2) / 2 + 0.3
+    eye = (dist * np.sin(a), 0.55 * top + 0.25, dist * np.cos(a))
+    return Camera.look_at(eye=eye, target=(0, 0.5 * top, 0), fov_y_deg=35, width=w, height=h)
+
+
+def _closeup_camera(human, w: int, h: int):
+    """Head and shoulders from the front right, framed on anny's face and shoulder keypoints."""
+    from synmitsuba.scene.camera import Camera
+    kp = human.keypoints()
+    face, shoulders = kp[:5].mean(0), kp[5:7].mean(0)
+    target = face + 0.35 * (shoulders - face)
+    a = np.radians(25.0)
+    dist = 0.8 * np.linalg.norm(kp[5] - kp[6]) / np.tan(np.radians(35) / 2)
+    return Camera.look_at(eye=tuple(target + dist * np.array([np.sin(a), 0.08, np.cos(a)])), target=tuple(target),
+                          fov_y_deg=35, width=w, height=h)
+
+
+def _subject_in_stage(seed: int):
+    from synmitsuba.body.recipe import sample_subject
+    from synmitsuba.body.subject import build_subject
+    from synmitsuba.compose.stage import preview_stage
+    recipe = sample_subject(np.random.default_rng(seed))
+    human = build_subject(recipe)
+    scene = preview_stage()
+    human.add_to(scene, instance=1)
+    return recipe, human, scene
+
+
+def turntable(args) -> int:
+    import synmitsuba as sm
+    output_dir(args.out)
+    sm.set_variant(args.variant)
+    recipe, human, scene = _subject_in_stage(args.seed)
+    with open(os.path.join(args.out, "recipe.json"), "w") as fh:
+        json.dump(recipe.to_dict(), fh, indent=1, sort_keys=True)
+    images = []
+    for k in range(args.views):
+        sample = sm.render(scene, _camera(human, 360.0 * k / args.views, *args.res), spp=args.spp, seed=args.seed)
+        sm.write_sample(sample, os.path.join(args.out, f"view_{k:02d}"))
+        images += [sm.to_srgb8(sample.rgb), LAYER_COLOURS[np.clip(sample.layer, 0, len(LAYER_COLOURS) - 1)]]
+    sheet = sm.write_png(os.path.join(args.out, "turntable.png"), sm.contact_sheet(images, columns=2 * min(args.views, 4)))
+    print(sheet)
+    return 0
+
+
+def sheet(args) -> int:
+    import synmitsuba as sm
+    path = args.out if args.out.endswith(".png") else os.path.join(args.out, "subjects.png")
+    output_file(path)
+    sm.set_variant(args.variant)
+    images = []
+    for k in range(args.sheet):
+        _, human, scene = _subject_in_stage(args.seed + k)
+        cam = _closeup_camera(human, *args.res) if args.closeup else _camera(human, 25.0, *args.res)
+        images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
+    print(sm.write_png(path, sm.contact_sheet(images, columns=min(6 if args.closeup else 8, args.sheet))))
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("subject", help="render a turntable of a sampled layered human (or a contact sheet)",
+                       description="Render a turntable of one sampled layered human: PNG views with layer ids, "
+                                   "EXR samples and recipe.json; or, with --sheet K, K subjects in one image.")
+    p.add_argument("--seed", type=natural_int, default=0, help="subject seed (with --sheet: the first of K seeds)")
+    p.add_argument("--out", required=True, help="output folder (with --sheet: a .png path or a folder)")
+    p.add_argument("--views", type=positive_int, default=6, help="turntable views")
+    p.add_argument("--res", type=resolution, default="240x320", help="WIDTHxHEIGHT of each view")
+    p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel")
+    p.add_argument("--sheet", type=natural_int, default=0, help="render this many subjects into one contact sheet "
+                   "instead of a turntable")
+    p.add_argument("--closeup", action="store_true", help="with --sheet: head and shoulders (default: the whole "
+                   "body; docs/closeups.png is --sheet 12 --closeup --res 512x512 --spp 64)")
+    add_variant_option(p)
+    p.set_defaults(func=lambda a: sheet(a) if a.sheet else turntable(a))

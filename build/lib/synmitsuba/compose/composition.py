@@ -1,0 +1,176 @@
+"""``compose_scene(config, rng) -> SceneSpec``: an environment with its lighting drawn, subjects
+sampled and placed over their whole clips, cameras placed and scored by ray-cast occlusion.
+The config is a ``ComposeConfig`` or its dict (YAML: ``configs/compose.yaml`` shows every key)."""
+from __future__ import annotations
+
+import glob
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.body.recipe import SubjectConfig, sample_subject
+from synmitsuba.compose import cameras as cams
+from synmitsuba.compose.environments import environment_names, load_environment, object_boxes, sample_lighting
+from synmitsuba.compose.occlusion import in_view, occlusion, surface_samples
+from synmitsuba.compose.placement import PlacementConfig, frame_hulls, place_subjects
+from synmitsuba.compose.spec import SceneSpec, SubjectSpec, ViewSpec, clip_motion, resolve_environment
+from synmitsuba.compose.subjects import place_motion
+from synmitsuba.errors import ConfigError
+from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
+
+MOTION_FILES = ("*.bvh", "*.npz")
+
+
+@dataclass
+class SubjectsConfig(Params):
+    count: object = spec(2, AnyOf((Number(1, 32, integer=True), Range(1, 32)), "give a count or [min, max] in 1..32"))
+    motions: list = spec(factory=lambda: ["walk", "idle", "wave", "jog", "side_step", "gesture"],
+                         check=ListOf(Text(), 1), doc="procedural kinds, .bvh/.npz files or folders of them")
+    seconds: float = spec(2.0, Number(0.1, 60), doc="clip length")
+    fps: float = spec(30.0, Number(1, 240))
+    config: SubjectConfig | None = spec(None, optional(Nested(SubjectConfig)), doc="what sampled subjects fix")
+
+
+@dataclass
+class ComposeConfig(Params):
+    environments: list = spec(factory=lambda: environment_names(), check=ListOf(Text(), 1),
+                              doc="names in scenes/environments (or files); one is drawn per scene")
+    subjects: SubjectsConfig = spec(factory=SubjectsConfig, check=Nested(SubjectsConfig))
+    placement: PlacementConfig = spec(factory=PlacementConfig, check=Nested(PlacementConfig))
+    cameras: cams.CameraConfig = spec(factory=cams.CameraConfig, check=Nested(cams.CameraConfig))
+    base: str = spec("", doc="folder relative motion paths start from (a config file's own)")
+
+
+def _motion_sources(cfg: SubjectsConfig, base: str) -> list[str]:
+    """Motion entries with folders expanded into their files (sorted: the same on every machine)."""
+    out = []
+    for i, m in enumerate(cfg.motions):
+        path = os.path.join(base, m)
+        if os.path.isdir(path):
+            files = sorted(f for pattern in MOTION_FILES for f in glob.glob(os.path.join(path, pattern)))
+            if not files:
+                raise ConfigError(f"subjects.motions[{i}]", m, "the folder holds no .bvh or .npz files")
+            out += files
+        else:
+            out.append(m)
+    return out
+
+
+def _subject_clip(human, source: str, seed: int, cfg: SubjectsConfig, base: str, i: int):
+    """The per-frame ground hulls of the subject's clip centred on its mean root position, its
+    tallest point over the clip and the lift that puts its lowest point over the clip on the
+    ground (retargeting keeps the source's root height, not the new legs' contact)."""
+    from synmitsuba.motion.retargeting import retarget
+    motion = place_motion(retarget(clip_motion(source, seed, cfg.seconds, cfg.fps, base, f"subjects[{i}].motion"),
+                                   human.skeleton), (0.0, 0.0), 0.0)
+    xz, height, low = [], -np.inf, np.inf
+    for f in range(motion.n_frames):
+        layers = human.pose(*motion.frame(f), resolve=False)  # a few mm do not change a hull
+        pts = np.concatenate([(lay.points.reshape(-1, 3) if lay.is_curves else lay.vertices) for lay in layers])
+        xz.append(pts[:, [0, 2]])
+        height = max(height, float(pts[:, 1].max()))
+        low = min(low, min(float(lay.vertices[:, 1].min()) for lay in layers if not lay.is_curves))
+    return frame_hulls(xz), height - low, -low
+
+
+def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
+    fr = np.stack([s.frames for s in subjects], 1)                         # (F, S, 4)
+    h = np.array([s.height for s in subjects])
+    frame_boxes = np.stack([fr[..., 0], np.zeros_like(fr[..., 0]), fr[..., 1], fr[..., 2],
+                            np.broadcast_to(h, fr.shape[:2]), fr[..., 3]], -1)  # (F, S, 6)
+    boxes = np.stack([np.concatenate([[s.footprint[0], 0.0, s.footprint[1]], [s.footprint[2], s.height, s.footprint[3]]])
+                      for s in subjects])
+    mid = lambda b: np.stack([(b[..., 0] + b[..., 2]) / 2, np.full(b.shape[:-1], target_height), (b[..., 1] + b[..., 3]) / 2], -1)  # noqa: E731
+    centres = mid(fr).mean(1)
+    centre = mid(np.stack([s.footprint for s in subjects])).mean(0)
+    return cams.Group(centres, centre, boxes, frame_boxes)
+
+
+def _score(scene, placed, subjects, trajs, frames, cfg: cams.CameraConfig, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Occlusion and in-view share (C, S) of every candidate, averaged over ``frames``."""
+    body = [p.human.parts[0] for p in placed]
+    samples = [surface_samples(b.rest, b.faces, cfg.points, rng) for b in body]
+    occ = np.zeros((len(trajs), len(placed)))
+    seen = np.zeros_like(occ)
+    for f in frames:
+        for p in placed:
+            p.pose_in(scene, f)
+        views = [_camera_at(t, f, cfg) for t in trajs]
+        for s, (p, smp) in enumerate(zip(placed, samples)):
+            pts = smp.on(scene.meshes[f"{p.prefix}_body"].vertices)  # posed just above
+            occ[:, s] += occlusion(scene, np.stack([t.eye[f] for t in trajs]), pts, p.instance)
+            seen[:, s] += [in_view(cam, pts) for cam in views]
+    return occ / len(frames), seen / len(frames)
+
+
+def _camera_at(t: cams.Trajectory, f: int, cfg: cams.CameraConfig):
+    from synmitsuba.scene.camera import Camera
+    return Camera.look_at(t.eye[f], t.target[f], t.up[f], width=cfg.width, height=cfg.height, K=t.K[f])
+
+
+def _azimuth(t: cams.Trajectory, centre: np.ndarray) -> float:
+    d = t.eye[0] - centre
+    return float(np.arctan2(d[0], d[2]))
+
+
+def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> SceneSpec:
+    """Compose one scene (see the module docstring); ``seed`` is only recorded in the spec."""
+    cfg = config if isinstance(config, ComposeConfig) else ComposeConfig.from_dict(config, "")
+    if not isinstance(rng, np.random.Generator):
+        raise ConfigError("rng", type(rng).__name__, "give a numpy.random.Generator (np.random.default_rng(seed))")
+    envs = [load_environment(n, f"environments[{i}]") for i, n in enumerate(cfg.environments)]  # all checked
+    pick = int(rng.integers(len(envs)))
+    name, env = cfg.environments[pick], envs[pick]
+    lighting, ground_seed = sample_lighting(env, rng), int(rng.integers(2 ** 31))
+    sc = cfg.subjects
+    count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
+    sources = _motion_sources(sc, cfg.base)
+    from synmitsuba.body.subject import build_subject
+    drafts = []
+    for i in range(count):
+        recipe = sample_subject(np.random.default_rng(int(rng.integers(2 ** 31))), sc.config)
+        source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
+        human = build_subject(recipe)
+        hulls, height, lift = _subject_clip(human, source, mseed, sc, cfg.base, i)
+        drafts.append((recipe, {"source": source, "seed": mseed, "seconds": sc.seconds, "fps": sc.fps,
+                                "base": cfg.base}, hulls, height, human, lift))
+    boxes = object_boxes(env)
+    placements = place_subjects([d[2] for d in drafts], env.area, boxes[:, [0, 2, 3, 5]], cfg.placement, rng)
+    subjects = [SubjectSpec(d[0], d[1], p.position, p.yaw_deg, 100 + i, p.footprint, p.frames, d[3], d[5])
+                for i, (d, p) in enumerate(zip(drafts, placements))]
+    n_frames = len(placements[0].frames)
+    spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, subjects, [], n_frames, sc.fps, [], seed,
+                      cfg.to_dict())
+    spec_.build([d[4] for d in drafts])
+    spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
+    return spec_
+
+
+def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> tuple[list, list]:
+    group = _group(spec_.subjects, cfg.target_height)
+    trajs = cams.ring(group, 0, cfg, rng) if cfg.mode == "ring" else cams.candidates(group, boxes, cfg, rng)
+    cams.check_count(len(trajs), cfg, group)
+    frames = sorted({int(round(x)) for x in np.linspace(0, spec_.n_frames - 1, min(cfg.score_frames, spec_.n_frames))})
+    scene, placed = spec_.build()
+    occ, seen = _score(scene, placed, spec_.subjects, trajs, frames, cfg, rng)
+    score = ((1 - occ) * seen).mean(1)
+    chosen = list(range(len(trajs))) if cfg.mode == "ring" else cams.choose_views(
+        score, np.array([_azimuth(t, group.centre) for t in trajs]), cfg.count, cfg.score_tolerance)
+    views = []
+    for k, c in enumerate(chosen):
+        t = trajs[c]
+        valid = (occ[c] <= cfg.occlusion_max) & (seen[c] >= cfg.in_view_min)
+        views.append(ViewSpec(f"cam{k}", t.kind, [_camera_at(t, f, cfg) for f in range(spec_.n_frames)],
+                              occ[c], seen[c], valid))
+    for p in placed:
+        p.pose_in(scene, 0)
+    return views, frames
+
+
+def load_compose_config(path: str) -> ComposeConfig:
+    """A composition config from YAML (``configs/compose.yaml``); motion paths in it are taken
+    from the file's folder. Every key is checked; errors name the key path."""
+    data = read_yaml(path, "config file", "environments, subjects, cameras, ...")
+    data.setdefault("base", os.path.dirname(os.path.abspath(path)))
+    return ComposeConfig.from_dict(data, "")

@@ -1,0 +1,246 @@
+"""Environments: a textured ground that reaches the horizon, static objects and lighting, each
+described by a YAML file in ``scenes/environments/`` (``ENVIRONMENTS`` lists them by name).
+
+An environment is a template: ``sample_lighting`` draws the sun (direction, turbidity) or
+the HDRI's rotation and scale from ranges, and ``add_environment`` puts the ground, the objects
+and the drawn lighting into a ``Scene``. Objects are boxes to placement and camera checks:
+``object_boxes`` gives their world-space bounds ``(x_min, y_min, z_min, x_max, y_max, z_max)``.
+"""
+from __future__ import annotations
+
+import glob
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError
+from synmitsuba.resources import asset_path
+from synmitsuba.schema import Choice, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
+from synmitsuba.scene.layers import Layer
+from synmitsuba.scene.materials import EnvMap, Material, SunSky
+
+SCENES_DIR = asset_path("scenes")  # package data: works from a wheel as from a checkout
+ENV_DIR = os.path.join(SCENES_DIR, "environments")
+GROUND_HALF_SIZE = 20000.0  # metres: the ground's edge lies < 0.01 degrees below the horizon from 3 m up
+GROUND_INSTANCE = 1
+OBJECT_INSTANCE = 2  # objects get 2, 3, ...; subjects start at 100
+
+
+# -- objects ------------------------------------------------------------------------------
+def _box(w, h, d, y0=0.0, x=0.0, z=0.0):
+    import trimesh
+    return trimesh.creation.box(extents=(w, h, d)).apply_translation((x, y0 + h / 2, z))
+
+
+def _cylinder(r, h, y0=0.0, x=0.0, z=0.0, sections=24):
+    import trimesh
+    m = trimesh.creation.cylinder(radius=r, height=h, sections=sections)
+    return m.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))).apply_translation((x, y0 + h / 2, z))
+
+
+def _sphere(r, y, x=0.0, z=0.0):
+    import trimesh
+    return trimesh.creation.icosphere(subdivisions=2, radius=r).apply_translation((x, y, z))
+
+
+def _bench(w, h, d):
+    legs = [_box(0.06, h - 0.05, d * 0.9, x=s * (w / 2 - 0.08)) for s in (-1, 1)]
+    return [(_box(w, 0.05, d, y0=h - 0.05), "main"), *((leg, "dark") for leg in legs)]
+
+
+def _tree(w, h, d):
+    trunk_h = 0.45 * h
+    return [(_cylinder(0.06 * w, trunk_h + 0.1 * h), "trunk"),
+            (_sphere(w / 2, trunk_h + w / 2 * 0.9), "main")]
+
+
+def _planter(w, h, d):
+    return [(_box(w, 0.45 * h, d), "main"), (_sphere(0.45 * min(w, d), 0.45 * h + 0.2 * min(w, d)), "leaf")]
+
+
+def _steps(w, h, d, n=3):
+    return [(_box(w, h * (k + 1) / n, d * (n - k) / n, z=-d / 2 + d * (n - k) / (2 * n)), "main") for k in range(n)]
+
+
+OBJECT_KINDS: dict = {  # kind -> (builder(w, h, d) -> [(trimesh, colour role)], default size w, h, d)
+    "box": (lambda w, h, d: [(_box(w, h, d), "main")], (0.6, 0.6, 0.6)),
+    "wall": (lambda w, h, d: [(_box(w, h, d), "main")], (4.0, 2.5, 0.2)),
+    "pillar": (lambda w, h, d: [(_cylinder(w / 2, h), "main")], (0.5, 3.0, 0.5)),
+    "bench": (_bench, (1.6, 0.45, 0.45)),
+    "planter": (_planter, (0.8, 0.9, 0.8)),
+    "tree": (_tree, (1.6, 3.5, 1.6)),
+    "steps": (_steps, (2.0, 0.45, 1.2)),
+}
+ROLE_COLOURS = {"dark": (0.05, 0.05, 0.05), "trunk": (0.12, 0.07, 0.04), "leaf": (0.05, 0.18, 0.04)}
+
+
+@dataclass
+class EnvObject(Params):
+    kind: str = spec(check=Choice(OBJECT_KINDS), doc="box, wall, pillar, bench, planter, tree or steps")
+    position: list = spec(factory=lambda: [0.0, 0.0], check=Vector(2, what="x, z metres on the ground"))
+    yaw_deg: float = spec(0.0, Number(-360, 360))
+    size: list | None = spec(None, optional(Vector(3, 0.01, 50, what="width, height, depth metres")),
+                             doc="default: the kind's own")
+    color: list = spec(factory=lambda: [0.5, 0.5, 0.5], check=Vector(3, 0, 1, what="linear RGB"))
+    roughness: float = spec(0.7, Number(0, 1))
+
+
+@dataclass
+class Ground(Params):
+    texture: str = spec("concrete", Choice(("tiles", "grass", "asphalt", "sand", "wood", "concrete")))
+    color: list = spec(factory=lambda: [0.35, 0.35, 0.33], check=Vector(3, 0, 1, what="linear RGB"))
+    tile_m: float = spec(1.0, Number(0.05, 20), doc="metres one texture repeat covers")
+    roughness: float = spec(0.8, Number(0, 1))
+
+
+@dataclass
+class Lighting(Params):
+    type: str = spec("sunsky", Choice(("sunsky", "envmap")))
+    sun_elevation_deg: list = spec(factory=lambda: [25.0, 65.0], check=Range(1, 90), doc="sunsky: range")
+    sun_azimuth_deg: list = spec(factory=lambda: [0.0, 360.0], check=Range(-360, 720), doc="sunsky: range")
+    turbidity: list = spec(factory=lambda: [2.0, 5.0], check=Range(1, 10), doc="sunsky: range")
+    file: str | None = spec(None, optional(Text()), doc="envmap: an .exr, relative to the environment file")
+    scale: list = spec(factory=lambda: [1.0, 1.0], check=Range(0, 1000), doc="envmap: range")
+    rotation_deg: list = spec(factory=lambda: [0.0, 360.0], check=Range(-360, 720), doc="envmap: range")
+
+
+@dataclass
+class Environment(Params):
+    """An environment template (see ``scenes/environments/*.yaml``)."""
+
+    name: str = spec(check=Text())
+    doc: str = spec("", Text())
+    area: list = spec(factory=lambda: [-5.0, -5.0, 5.0, 5.0], check=Vector(4, what="x_min, z_min, x_max, z_max"),
+                      doc="where subjects may stand")
+    ground: Ground = spec(factory=Ground, check=Nested(Ground))
+    objects: list = spec(factory=list, check=ListOf(Nested(EnvObject)))
+    lighting: Lighting = spec(factory=Lighting, check=Nested(Lighting))
+    path: str = field(default="", metadata={"doc": "the file it came from"})
+
+    def __post_init__(self):
+        a = self.area
+        if not (a[0] < a[2] and a[1] < a[3]):
+            raise ConfigError("area", a, "give [x_min, z_min, x_max, z_max] with x_min < x_max and z_min < z_max")
+
+
+def environment_names() -> list[str]:
+    return sorted(os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.path.join(ENV_DIR, "*.yaml")))
+
+
+def load_environment(name_or_path: str, where: str = "environment") -> Environment:
+    """An environment by name (``scenes/environments/<name>.yaml``) or by file path."""
+    import yaml
+    path = name_or_path if os.path.isfile(str(name_or_path)) else os.path.join(ENV_DIR, f"{name_or_path}.yaml")
+    if not os.path.isfile(path):
+        raise ConfigError(where, name_or_path, f"no such environment; use one of {', '.join(environment_names())} "
+                          "or the path of an environment YAML file")
+    with open(path) as fh:
+        data = yaml.safe_load(fh) or {}
+    data.pop("path", None)
+    env = Environment.from_dict(data, f"{where}({os.path.basename(path)})")
+    env.path = os.path.abspath(path)
+    if env.lighting.type == "envmap":
+        hdri = os.path.join(os.path.dirname(env.path), env.lighting.file or "")
+        if not os.path.isfile(hdri):
+            raise ConfigError(f"{where}.lighting.file", env.lighting.file, "give an existing .exr relative to the "
+                              "environment file")
+    return env
+
+
+# -- lighting -----------------------------------------------------------------------------
+def sample_lighting(env: Environment, rng: np.random.Generator) -> dict:
+    """Draw this environment's lighting: a plain dict stored in a scene spec."""
+    lit = env.lighting
+    if lit.type == "sunsky":
+        el, az = np.radians(rng.uniform(*lit.sun_elevation_deg)), np.radians(rng.uniform(*lit.sun_azimuth_deg))
+        direction = [float(np.cos(el) * np.sin(az)), float(np.sin(el)), float(np.cos(el) * np.cos(az))]
+        return {"type": "sunsky", "sun_direction": direction, "turbidity": float(rng.uniform(*lit.turbidity))}
+    return {"type": "envmap", "file": os.path.relpath(os.path.join(os.path.dirname(env.path), lit.file), SCENES_DIR),
+            "scale": float(rng.uniform(*lit.scale)), "rotation_deg": float(rng.uniform(*lit.rotation_deg))}
+
+
+def lighting_emitter(lighting: dict):
+    if lighting["type"] == "sunsky":
+        return SunSky(sun_direction=tuple(lighting["sun_direction"]), turbidity=lighting["turbidity"])
+    return EnvMap(source=os.path.join(SCENES_DIR, lighting["file"]), scale=lighting["scale"],
+                  rotation_deg=lighting["rotation_deg"])
+
+
+# -- ground -------------------------------------------------------------------------------
+def _periodic_noise(rng: np.random.Generator, n: int, beta: float) -> np.ndarray:
+    """Seamlessly tiling noise: white noise shaped by 1/f^beta in Fourier space, in [0, 1]."""
+    f = np.fft.fftfreq(n)
+    r = np.hypot(*np.meshgrid(f, f))
+    r[0, 0] = 1.0
+    img = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((n, n))) / r ** beta))
+    return (img - img.min()) / (np.ptp(img) + 1e-12)
+
+
+def ground_texture(ground: Ground, rng: np.random.Generator, n: int = 256) -> np.ndarray:
+    """A tiling (n, n, 3) linear-RGB texture of the ground's kind around its colour."""
+    base = np.asarray(ground.color, np.float64)
+    coarse, fine = _periodic_noise(rng, n, 1.2), _periodic_noise(rng, n, 0.3)
+    shade = 0.75 + 0.3 * coarse + 0.15 * (fine - 0.5)
+    u = (np.arange(n) + 0.5) / n
+    if ground.texture == "tiles":  # 4 x 4 slabs with mortar joints and per-slab tone
+        tone = 0.85 + 0.3 * rng.random((4, 4))
+        idx = np.minimum((u * 4).astype(int), 3)
+        shade = shade * tone[idx[:, None], idx[None, :]]
+        joint = (np.abs((u * 4) % 1 - 0.5) > 0.47)
+        shade = np.where(joint[:, None] | joint[None, :], 0.45, shade)
+    elif ground.texture == "wood":  # planks along u with grain
+        plank = np.minimum((u * 6).astype(int), 5)
+        tone = 0.8 + 0.4 * rng.random(6)
+        grain = 0.9 + 0.1 * np.sin(2 * np.pi * (8 * u[None, :] + 3 * coarse))
+        shade = tone[plank][:, None] * grain * (0.95 + 0.1 * fine)
+        shade = np.where((np.abs((u * 6) % 1 - 0.5) > 0.48)[:, None], 0.4, shade)
+    elif ground.texture == "grass":
+        shade = 0.6 + 0.5 * coarse + 0.4 * (fine - 0.5)
+    tex = base[None, None, :] * shade[..., None]
+    if ground.texture == "grass":  # yellowish patches
+        tex = tex + (coarse[..., None] - 0.5) * np.array([0.06, 0.03, -0.01])
+    return np.clip(tex, 0.0, 1.0).astype(np.float32)
+
+
+def add_ground(scene, ground: Ground, rng: np.random.Generator) -> None:
+    s = GROUND_HALF_SIZE
+    v = np.array([[-s, 0, -s], [s, 0, -s], [s, 0, s], [-s, 0, s]], float)
+    uv = v[:, [0, 2]] / ground.tile_m
+    mat = Material(texture=ground_texture(ground, rng), kind="principled", roughness=ground.roughness, specular=0.3,
+                   name="ground")
+    scene.add_mesh("ground", v, np.array([[0, 2, 1], [0, 3, 2]]), uv=uv, normals=np.tile([0, 1.0, 0], (4, 1)),
+                   material=mat, instance=GROUND_INSTANCE, layer=int(Layer.GROUND))
+
+
+# -- objects in a scene -------------------------------------------------------------------
+def object_parts(obj: EnvObject) -> list:
+    """World-space (trimesh, linear RGB) parts of one object."""
+    from synmitsuba.geometry import axis_rotation
+    builder, default = OBJECT_KINDS[obj.kind]
+    w, h, d = obj.size or default
+    M = np.eye(4)
+    M[:3, :3] = axis_rotation("y", np.radians(obj.yaw_deg))
+    M[:3, 3] = [obj.position[0], 0.0, obj.position[1]]
+    return [(mesh.apply_transform(M), tuple(obj.color) if role == "main" else ROLE_COLOURS[role])
+            for mesh, role in builder(w, h, d)]
+
+
+def object_boxes(env: Environment) -> np.ndarray:
+    """(N, 6) world bounds ``(x_min, y_min, z_min, x_max, y_max, z_max)`` of every object."""
+    boxes = []
+    for obj in env.objects:
+        pts = np.concatenate([m.vertices for m, _ in object_parts(obj)])
+        boxes.append(np.concatenate([pts.min(0), pts.max(0)]))
+    return np.asarray(boxes, np.float64).reshape(-1, 6)
+
+
+def add_environment(scene, env: Environment, lighting: dict, rng: np.random.Generator) -> None:
+    """Ground, objects (instances 2, 3, ...) and ``lighting`` (from ``sample_lighting``)."""
+    add_ground(scene, env.ground, rng)
+    for i, obj in enumerate(env.objects):
+        for k, (mesh, colour) in enumerate(object_parts(obj)):
+            mat = Material(base_color=colour, kind="principled", roughness=obj.roughness)
+            scene.add_mesh(f"object{i}_{obj.kind}_{k}", mesh.vertices, mesh.faces, material=mat,
+                           instance=OBJECT_INSTANCE + i, layer=int(Layer.OBJECT))
+    scene.set_environment(lighting_emitter(lighting))

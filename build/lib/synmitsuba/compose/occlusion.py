@@ -1,0 +1,47 @@
+"""Occlusion by ray casting (SynBody): rays from a camera to points sampled uniformly (by area)
+on a subject's body surface; the share that first hits another instance is its occlusion."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.engine.raycast import first_hits
+from synmitsuba.scene.camera import Camera
+
+
+@dataclass
+class SurfaceSamples:
+    """Fixed points on a mesh: triangle indices and barycentric weights, so the same points
+    follow the surface as it is posed."""
+
+    faces: np.ndarray     # (N, 3) vertex indices of each point's triangle
+    weights: np.ndarray   # (N, 3) barycentric weights
+
+    def on(self, vertices: np.ndarray) -> np.ndarray:
+        return np.einsum("nk,nkd->nd", self.weights, vertices[self.faces])
+
+
+def surface_samples(vertices, faces, n: int, rng: np.random.Generator) -> SurfaceSamples:
+    """``n`` points uniform by area on the mesh (vertices (V, 3), faces (F, 3))."""
+    from synmitsuba.geometry import triangle_areas
+    areas = triangle_areas(np.asarray(vertices)[np.asarray(faces)])
+    tri = rng.choice(len(faces), size=n, p=areas / areas.sum())
+    r1, r2 = np.sqrt(rng.random(n)), rng.random(n)
+    w = np.stack([1 - r1, r1 * (1 - r2), r1 * r2], 1)
+    return SurfaceSamples(np.asarray(faces)[tri], w)
+
+
+def occlusion(scene, eyes: np.ndarray, points: np.ndarray, instance: int) -> np.ndarray:
+    """(C,) share of rays from each eye (C, 3) to the points (P, 3) that first hit an instance
+    other than ``instance`` (and other than nothing)."""
+    C, P = len(eyes), len(points)
+    ids = first_hits(scene, np.repeat(eyes, P, 0), np.tile(points, (C, 1))).reshape(C, P)
+    return ((ids != 0) & (ids != instance)).mean(1)
+
+
+def in_view(camera: Camera, points: np.ndarray) -> float:
+    """Share of points in front of the camera and inside its image."""
+    uv, z = camera.project(points)
+    ok = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)
+    return float(ok.mean())

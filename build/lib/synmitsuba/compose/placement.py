@@ -1,0 +1,122 @@
+"""Whole-clip subject placement (SynBody, Scene Placement): a subject is the smallest ground box
+that envelops its per-frame boxes over the whole clip; subjects are placed one at a time by grid
+search over positions and yaws with zero overlap with objects and subjects already placed, a
+distance constraint that keeps the group together, and a random pick among valid solutions.
+
+Boxes on the ground are ``(x_min, z_min, x_max, z_max)`` metres.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError, SynMitsubaWarning
+from synmitsuba.schema import Number, Params, POSITIVE, spec
+
+
+@dataclass
+class PlacementConfig(Params):
+    grid_step: float = spec(0.1, Number(0.01, 2.0), doc="metres between candidate positions")
+    yaw_steps: int = spec(8, POSITIVE, doc="candidate headings per position (evenly spaced, random offset)")
+    group_radius: float = spec(3.0, Number(0.1, 100), doc="max metres from a subject's box centre to the group's")
+    margin: float = spec(0.05, Number(0, 5), doc="clearance kept around every box, metres")
+
+
+def frame_hulls(xz_per_frame) -> list[np.ndarray]:
+    """Per frame, the ground-plane convex hull of a subject's points (all layers): boxes under
+    any yaw come from these few points exactly."""
+    from scipy.spatial import ConvexHull
+    out = []
+    for pts in xz_per_frame:
+        pts = np.asarray(pts, np.float64)
+        out.append(pts[ConvexHull(pts).vertices] if len(pts) >= 3 else pts)
+    return out
+
+
+def frame_boxes(hulls: list[np.ndarray], yaw_deg: float = 0.0, offset=(0.0, 0.0)) -> np.ndarray:
+    """(F, 4) per-frame ground boxes of hull points turned by ``yaw_deg`` about the origin (as
+    ``Motion.moved`` turns a clip) and shifted by ``offset`` (x, z)."""
+    a = np.radians(yaw_deg)
+    # Motion.moved applies R_y(a) to [x, y, z]: x' = cos a x + sin a z, z' = -sin a x + cos a z
+    R = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+    boxes = []
+    for h in hulls:
+        p = h @ R.T + np.asarray(offset, np.float64)
+        boxes.append([p[:, 0].min(), p[:, 1].min(), p[:, 0].max(), p[:, 1].max()])
+    return np.asarray(boxes)
+
+
+def envelope(boxes: np.ndarray) -> np.ndarray:
+    """The smallest box enveloping (N, 4) boxes."""
+    b = np.asarray(boxes).reshape(-1, 4)
+    return np.array([b[:, 0].min(), b[:, 1].min(), b[:, 2].max(), b[:, 3].max()])
+
+
+def overlap_area(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Overlap areas of boxes ``a`` (..., 4) and ``b`` (..., 4), broadcast."""
+    w = np.minimum(a[..., 2], b[..., 2]) - np.maximum(a[..., 0], b[..., 0])
+    h = np.minimum(a[..., 3], b[..., 3]) - np.maximum(a[..., 1], b[..., 1])
+    return np.clip(w, 0, None) * np.clip(h, 0, None)
+
+
+def _candidates(area, step: float) -> np.ndarray:
+    xs = np.round(area[0] + step * np.arange(int(np.floor((area[2] - area[0]) / step + 1e-9)) + 1), 9)
+    zs = np.round(area[1] + step * np.arange(int(np.floor((area[3] - area[1]) / step + 1e-9)) + 1), 9)
+    return np.stack(np.meshgrid(xs, zs, indexing="ij"), -1).reshape(-1, 2)
+
+
+def _valid(cands: np.ndarray, box: np.ndarray, area, obstacles: np.ndarray, centres: list, cfg: PlacementConfig):
+    """Mask of candidate positions where the clip box (at the origin: ``box``) stays inside the
+    area, clear of every obstacle box by the margin and near enough to the group."""
+    boxes = box[None, :] + np.concatenate([cands, cands], 1)
+    inside = (boxes[:, 0] >= area[0]) & (boxes[:, 1] >= area[1]) & (boxes[:, 2] <= area[2]) & (boxes[:, 3] <= area[3])
+    ok = inside.copy()
+    if len(obstacles):
+        grown = obstacles + np.array([-1, -1, 1, 1]) * cfg.margin
+        ok &= ~(overlap_area(boxes[:, None, :], grown[None, :, :]) > 0).any(1)
+    if centres:
+        mid = (boxes[:, :2] + boxes[:, 2:]) / 2
+        ok &= np.linalg.norm(mid - np.mean(centres, 0), axis=1) <= cfg.group_radius
+    return ok
+
+
+@dataclass
+class Placement:
+    position: tuple      # (x, z) metres: where the clip's mean root position goes
+    yaw_deg: float
+    footprint: np.ndarray  # (4,) whole-clip box
+    frames: np.ndarray     # (F, 4) per-frame boxes
+
+
+def place_subjects(hulls_per_subject: list, area, object_boxes: np.ndarray, cfg: PlacementConfig,
+                   rng: np.random.Generator) -> list[Placement]:
+    """Place subjects one at a time (their per-frame hulls centred on the clip's mean root
+    position). Returns one placement per subject placed: fewer than asked with a warning when
+    the rest do not fit; a ConfigError when not even the first does."""
+    obstacles = np.asarray(object_boxes, np.float64).reshape(-1, 4)
+    cands = _candidates(area, cfg.grid_step)
+    placed: list[Placement] = []
+    for i, hulls in enumerate(hulls_per_subject):
+        yaws = (rng.uniform(0, 360 / cfg.yaw_steps) + np.arange(cfg.yaw_steps) * 360 / cfg.yaw_steps) % 360 - 180
+        options = []
+        for yaw in yaws:
+            box = envelope(frame_boxes(hulls, yaw))
+            ok = _valid(cands, box, area, obstacles, [((p.footprint[:2] + p.footprint[2:]) / 2) for p in placed], cfg)
+            options += [(float(yaw), c) for c in cands[ok]]
+        if not options:
+            why = (f"subject {i} does not fit: no position in area {list(area)} with step {cfg.grid_step} m keeps "
+                   f"its whole-clip box clear of {len(obstacles)} boxes by {cfg.margin} m"
+                   + (f" within {cfg.group_radius} m of the group" if placed else ""))
+            if not placed:
+                raise ConfigError("subjects", len(hulls_per_subject), why + "; choose shorter or slower motions, "
+                                  "a larger environment area or fewer objects")
+            warnings.warn(f"{why}; placing {len(placed)} of {len(hulls_per_subject)} subjects (raise "
+                          "placement.group_radius or pick fewer subjects)", SynMitsubaWarning, stacklevel=2)
+            break
+        yaw, pos = options[int(rng.integers(len(options)))]
+        frames = frame_boxes(hulls, yaw, pos)
+        placed.append(Placement((float(pos[0]), float(pos[1])), yaw, envelope(frames), frames))
+        obstacles = np.concatenate([obstacles, envelope(frames)[None]], 0)
+    return placed

@@ -1,0 +1,135 @@
+"""``SynDataset``: a PyTorch Dataset over a folder of written samples (a generated dataset or any
+folder ``write_sample`` filled). Only complete samples are listed (the JSON sidecar is written
+last).
+
+- ``crop=None``: one item per sample: the passes asked for in ``modalities`` (default all:
+  ``rgb`` (3, H, W), ``depth``, ``mask``, ``normal`` (3, H, W), ``instance``, ``layer``, ...),
+  the camera ``K``, ``R``, ``t`` and, per subject padded to ``max_subjects`` (``subjects_valid``
+  says which rows are real), ``keypoints2d`` (S, 23, 3: x, y, visibility class),
+  ``keypoints3d_cam`` (S, 23, 3), ``body_rotations_cam`` (S, J, 3), ``body_root_cam`` (S, 3),
+  ``instances`` (S,).
+- ``crop="person"``: one item per valid subject and sample, the top-down HMR crop: ``image``
+  (3, size, size) cut around the keypoint box (centre, side = 200 * scale) and resized,
+  ``keypoints2d`` (23, 3) in crop pixels with visibility, ``keypoints3d_cam``,
+  ``body_rotations_cam``, ``body_root_cam``, ``mask`` (size, size) of the subject, the crop's
+  ``K`` (the camera's, shifted and scaled), ``center``, ``scale``.
+Items are dicts of tensors (plus ``stem``) that the default collate batches, with
+``num_workers > 0`` too.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError
+from synmitsuba.io.dataset import list_samples
+from synmitsuba.io.exr import read_sample
+
+CROPS = (None, "person")
+
+
+def _torch():
+    import torch
+    return torch
+
+
+class _Base:
+    def __init__(self, root: str, modalities=None, crop: str | None = None, size: int = 224,
+                 max_subjects: int | None = None):
+        if crop not in CROPS:
+            raise ConfigError("crop", crop, "use None (whole images) or 'person' (one crop per subject)")
+        self.stems = list_samples(root)
+        self.modalities, self.crop, self.size = modalities, crop, int(size)
+        self.index = []  # (stem, subject row) per item
+        counts = []
+        for stem in self.stems:
+            with open(f"{stem}.json") as fh:
+                subjects = json.load(fh).get("subjects", [])
+            counts.append(len(subjects))
+            if crop == "person":
+                self.index += [(stem, k) for k, r in enumerate(subjects) if r["valid"] and r["bbox_keypoints"]]
+        if crop is None:
+            self.index = [(stem, None) for stem in self.stems]
+        self.max_subjects = max_subjects if max_subjects is not None else max(counts, default=0)
+
+    def __len__(self) -> int:
+        return len(self.index)
+
+    def __getitem__(self, i: int) -> dict:
+        stem, k = self.index[i]
+        s = read_sample(stem)
+        return self._image(s, stem) if k is None else self._person(s, stem, s.subjects[k])
+
+    def _image(self, s, stem) -> dict:
+        torch = _torch()
+        item = {}
+        for name in self.modalities or tuple(s.passes):
+            if name not in s.passes:
+                raise ConfigError("modalities", name, f"this sample has no such pass; it has {', '.join(s.passes)}")
+            arr = s.passes[name]
+            arr = arr.astype(np.int64) if arr.dtype == np.uint8 else arr
+            t = torch.from_numpy(np.ascontiguousarray(arr))
+            item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
+        item.update(_subjects(s.subjects, self.max_subjects))
+        item.update(K=torch.from_numpy(s.camera.K), R=torch.from_numpy(s.camera.R), t=torch.from_numpy(s.camera.t),
+                    stem=stem)
+        return item
+
+    def _person(self, s, stem, rec) -> dict:
+        torch = _torch()
+        side = 200.0 * rec["scale"]
+        x0, y0 = rec["center"][0] - side / 2, rec["center"][1] - side / 2
+        f = self.size / side
+        A = np.array([[f, 0, -f * x0], [0, f, -f * y0], [0, 0, 1.0]])  # image pixels -> crop pixels
+        image = _warp(s.rgb, A, self.size)
+        mask = _warp((s.instance == rec["instance"]).astype(np.float32)[..., None], A, self.size)[..., 0] > 0.5
+        kp = np.concatenate([rec["keypoints2d"] * f - [f * x0, f * y0], rec["visibility"][:, None]], 1)
+        return {"image": torch.from_numpy(np.ascontiguousarray(image.transpose(2, 0, 1), np.float32)),
+                "mask": torch.from_numpy(mask), "keypoints2d": torch.from_numpy(kp.astype(np.float32)),
+                "keypoints3d_cam": torch.from_numpy(rec["keypoints3d_cam"].astype(np.float32)),
+                "body_rotations_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["rotations"], np.float32)),
+                "body_root_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["root_translation"], np.float32)),
+                "K": torch.from_numpy(A @ s.camera.K), "center": torch.tensor(rec["center"]),
+                "scale": torch.tensor(rec["scale"]), "instance": rec["instance"], "stem": stem}
+
+
+def _warp(img: np.ndarray, A: np.ndarray, size: int) -> np.ndarray:
+    """``img`` (H, W, C) resampled (bilinear) into a size x size crop: crop pixel centre c maps
+    to image point A^-1 c; outside the image is 0."""
+    from scipy.ndimage import map_coordinates
+    inv = np.linalg.inv(A)
+    u, v = np.meshgrid(np.arange(size) + 0.5, np.arange(size) + 0.5)
+    src = np.stack([u, v, np.ones_like(u)], -1) @ inv.T
+    coords = [src[..., 1] - 0.5, src[..., 0] - 0.5]  # array indices of the source pixel centres
+    return np.stack([map_coordinates(img[..., c], coords, order=1, cval=0.0) for c in range(img.shape[2])], -1)
+
+
+def _subjects(records: list, n: int) -> dict:
+    torch = _torch()
+    J = len(records[0]["body_params_cam"]["rotations"]) if records else 0
+    kp2 = np.zeros((n, 23, 3), np.float32)
+    kp3 = np.zeros((n, 23, 3), np.float32)
+    rot = np.zeros((n, J, 3), np.float32)
+    root = np.zeros((n, 3), np.float32)
+    inst, valid = np.zeros(n, np.int64), np.zeros(n, bool)
+    for k, r in enumerate(records[:n]):
+        kp2[k] = np.concatenate([r["keypoints2d"], r["visibility"][:, None]], 1)
+        kp3[k], rot[k] = r["keypoints3d_cam"], r["body_params_cam"]["rotations"]
+        root[k], inst[k], valid[k] = r["body_params_cam"]["root_translation"], r["instance"], r["valid"]
+    if not n:
+        return {}
+    return {"keypoints2d": torch.from_numpy(kp2), "keypoints3d_cam": torch.from_numpy(kp3),
+            "body_rotations_cam": torch.from_numpy(rot), "body_root_cam": torch.from_numpy(root),
+            "instances": torch.from_numpy(inst), "subjects_valid": torch.from_numpy(valid)}
+
+
+def _as_torch_dataset():
+    try:
+        import torch.utils.data as tud
+    except ImportError:  # torch is a dependency, but keep the reader usable without it
+        return _Base
+    return type("SynDataset", (_Base, tud.Dataset), {"__doc__": __doc__})
+
+
+SynDataset = _as_torch_dataset()

@@ -1,0 +1,241 @@
+"""Sharded, resumable dataset generation: one task per sequence, seeded from (seed, index) only.
+
+Layout: ``OUT/seq_XXXXXX/`` holds a sequence's ``scene.json`` and its samples
+(``f0000_cam0.exr/.json/.png``, ...). A task writes into ``seq_XXXXXX.partial/`` and renames
+it when the sequence is complete; only then does the parent append the sequence's line to
+``OUT/manifest.jsonl``. A rerun skips sequences in the manifest and redoes the rest
+(partial folders are removed first). Timings and host names go to ``OUT/run.log``, never into
+sample files, so the files are byte-identical whoever renders them.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError
+from synmitsuba.generate.config import GenerateConfig
+
+EXECUTORS = ("local", "ray")
+
+
+def sequence_rng(seed: int, index: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence([int(seed), int(index)]))
+
+
+def run_sequence(config: dict, index: int, out: str) -> dict:
+    """Compose, render and write sequence ``index`` (a task; ``config`` as a plain dict so it
+    crosses process boundaries). Returns the sequence's manifest entry."""
+    from synmitsuba.compose.composition import compose_scene
+    from synmitsuba.engine.build import release_memory
+    from synmitsuba.io.exr import write_sample
+    from synmitsuba.pipeline import render_sequence
+    cfg = GenerateConfig.from_dict(config, "")
+    name = f"seq_{index:06d}"
+    final, partial = os.path.join(out, name), os.path.join(out, f"{name}.partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    os.makedirs(partial)
+    t0 = time.perf_counter()
+    spec = compose_scene(cfg.compose, sequence_rng(cfg.seed, index), seed=cfg.seed)
+    with open(os.path.join(partial, "scene.json"), "w") as fh:
+        fh.write(spec.to_json(indent=1))
+    count = spec.n_frames if cfg.frames is None else min(cfg.frames, -(-spec.n_frames // cfg.stride))
+    frames = list(range(0, spec.n_frames, cfg.stride))[:count]
+    render_seed = int(np.random.SeedSequence([cfg.seed, index, 1]).generate_state(1)[0] % 2 ** 30)
+    stems = []
+    r = cfg.render
+    try:
+        for f, view, sample in render_sequence(spec, frames=frames, spp=r.spp, seed=render_seed,
+                                               annotate=cfg.annotate, body_models=cfg.smplx, max_depth=r.max_depth,
+                                               sampler=r.sampler, denoise=r.denoise):
+            sample.meta.update(sequence=index)
+            stem = f"f{f:04d}_{view}"
+            write_sample(sample, os.path.join(partial, stem))
+            stems.append(stem)
+    finally:
+        release_memory()  # this sequence's kernels and buffers: the next one has other BSDFs
+    shutil.rmtree(final, ignore_errors=True)
+    os.replace(partial, final)
+    import resource
+    return {"sequence": index, "folder": name, "samples": stems, "frames": len(frames), "views": len(spec.views),
+            "subjects": len(spec.subjects), "environment": spec.environment,
+            "seconds": round(time.perf_counter() - t0, 3), "pid": os.getpid(),
+            "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1), "rss_mb": _rss_mb()}
+
+
+def _rss_mb() -> float | None:
+    """The worker's resident memory now (the peak above only grows, so a leak hides in it)."""
+    try:
+        with open("/proc/self/statm") as fh:
+            return round(int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20, 1)
+    except OSError:  # not Linux
+        return None
+
+
+@dataclass
+class Summary:
+    done: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+    failed: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+    def line(self) -> str:
+        return (f"{len(self.done)} done, {len(self.skipped)} skipped (already complete), {len(self.failed)} failed, "
+                f"{self.seconds:.1f} s")
+
+
+def manifest_entries(out: str) -> dict[int, dict]:
+    """Complete sequences by index (a torn last line, from a crash mid-append, is ignored)."""
+    entries = {}
+    path = os.path.join(out, "manifest.jsonl")
+    if os.path.isfile(path):
+        with open(path) as fh:
+            for line in fh:
+                try:
+                    e = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                if os.path.isdir(os.path.join(out, e["folder"])):
+                    entries[e["sequence"]] = e
+    return entries
+
+
+def _rewrite_manifest(out: str, entries: dict) -> None:
+    """Keep only the complete entries (a torn last line from a crash would swallow the next
+    append), written under a temporary name and renamed."""
+    path = os.path.join(out, "manifest.jsonl")
+    if not os.path.isfile(path):
+        return
+    tmp = f"{path}.tmp"
+    with open(tmp, "w") as fh:
+        for e in entries.values():
+            fh.write(json.dumps(e, sort_keys=True) + "\n")
+    os.replace(tmp, path)
+
+
+def _append(out: str, entry: dict) -> None:
+    timing = {k: entry[k] for k in ("seconds", "pid", "peak_rss_mb", "rss_mb")}  # the run log's, not the dataset's
+    clean = {k: v for k, v in entry.items() if k not in timing}
+    with open(os.path.join(out, "manifest.jsonl"), "a") as fh:
+        fh.write(json.dumps(clean, sort_keys=True) + "\n")
+        fh.flush()
+        os.fsync(fh.fileno())
+    with open(os.path.join(out, "run.log"), "a") as fh:
+        fh.write(json.dumps({"sequence": entry["sequence"], **timing, "host": socket.gethostname()}) + "\n")
+
+
+def check_output(out: str) -> str:
+    """The output folder, created; a clear error before any work when it cannot be written."""
+    out = os.path.abspath(os.fspath(out))
+    try:
+        os.makedirs(out, exist_ok=True)
+        probe = os.path.join(out, ".write-test")
+        with open(probe, "w"):
+            pass
+        os.remove(probe)
+    except OSError as exc:
+        raise ConfigError("--out", out, f"cannot write there ({exc.strerror}); pick a writable folder") from None
+    return out
+
+
+def _worker_init(threads: int) -> None:
+    os.environ["SYNMITSUBA_THREADS"] = str(threads)
+
+
+def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str = "local", ray_address: str | None = None,
+             max_failures: int = 2, progress: bool = True) -> Summary:
+    """Render every sequence of ``config`` not yet in ``out``'s manifest; retry a failing one up to
+    ``max_failures`` times, then report it (never dropped silently)."""
+    if executor not in EXECUTORS:
+        raise ConfigError("--executor", executor, f"use one of {', '.join(EXECUTORS)}")
+    out = check_output(out)
+    for name in os.listdir(out):
+        if name.endswith(".partial"):
+            shutil.rmtree(os.path.join(out, name), ignore_errors=True)
+    done = manifest_entries(out)
+    _rewrite_manifest(out, done)
+    todo = [i for i in range(config.sequences) if i not in done]
+    summary = Summary(skipped=sorted(i for i in done if i < config.sequences))
+    t0 = time.perf_counter()
+    run = _run_ray if executor == "ray" else _run_local
+    run(config.to_dict(), todo, out, workers, max_failures, summary, progress, ray_address)
+    summary.seconds = time.perf_counter() - t0
+    return summary
+
+
+def _bar(total: int, progress: bool):
+    from tqdm import tqdm
+    return tqdm(total=total, desc="sequences", unit="seq", disable=not progress)
+
+
+def _finish(out, entry, summary, bar, frames) -> None:
+    _append(out, entry)
+    summary.done.append(entry["sequence"])
+    frames[0] += entry["frames"] * entry["views"]
+    bar.set_postfix(images_per_s=f"{frames[0] / max(bar.format_dict['elapsed'], 1e-9):.2f}")
+    bar.update(1)
+
+
+def _run_local(cfg: dict, todo: list, out: str, workers: int, max_failures: int, summary: Summary, progress: bool,
+               _address=None) -> None:
+    """A spawn process pool; a sequence whose worker dies (killed, out of memory) is retried
+    like a failing one, on a fresh pool."""
+    import multiprocessing as mp
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
+    threads = max(1, (os.cpu_count() or 1) // max(1, workers))
+    attempts = {i: 0 for i in todo}
+    queue, frames = list(todo), [0]
+    with _bar(len(todo), progress) as bar:
+        while queue:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
+                                     initializer=_worker_init, initargs=(threads,)) as pool:
+                pending = {pool.submit(run_sequence, cfg, i, out): i for i in queue}
+                queue = []
+                while pending:
+                    finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in finished:
+                        i = pending.pop(fut)
+                        try:
+                            _finish(out, fut.result(), summary, bar, frames)
+                            continue
+                        except BrokenProcessPool as exc:
+                            error = f"a worker died ({exc})"
+                        except Exception as exc:  # noqa: BLE001 - reported by sequence, retried a bounded number of times
+                            error = f"{type(exc).__name__}: {exc}"
+                        attempts[i] += 1
+                        if attempts[i] > max_failures:
+                            summary.failed[i] = error
+                        elif "worker died" in error:
+                            queue.append(i)  # the pool is broken: rerun on a fresh one
+                        else:
+                            pending[pool.submit(run_sequence, cfg, i, out)] = i
+
+
+def _run_ray(cfg: dict, todo: list, out: str, workers: int, max_failures: int, summary: Summary, progress: bool,
+             address=None) -> None:
+    try:
+        import ray
+    except ImportError:
+        raise ConfigError("--executor", "ray", "Ray is not installed: pip install 'synmitsuba[ray]'") from None
+    if not ray.is_initialized():
+        ray.init(address=address, num_cpus=None if address else (os.cpu_count() or 1), include_dashboard=False,
+                 log_to_driver=False)
+    threads = max(1, (os.cpu_count() or 1) // max(1, workers))
+    task = ray.remote(num_cpus=threads, max_retries=max_failures, retry_exceptions=True,
+                      runtime_env={"env_vars": {"SYNMITSUBA_THREADS": str(threads)}})(run_sequence)
+    refs = {task.remote(cfg, i, out): i for i in todo}
+    frames = [0]
+    with _bar(len(todo), progress) as bar:
+        while refs:
+            ready, _ = ray.wait(list(refs), num_returns=1)
+            i = refs.pop(ready[0])
+            try:
+                _finish(out, ray.get(ready[0]), summary, bar, frames)
+            except Exception as exc:  # noqa: BLE001 - Ray already retried it max_failures times
+                summary.failed[i] = f"{type(exc).__name__}: {exc}"

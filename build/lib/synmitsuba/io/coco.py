@@ -1,0 +1,154 @@
+"""COCO export: person keypoints and instance segmentation of every written sample in a folder.
+
+``export_coco(dataset_dir, out_json)`` writes one image per sample (its PNG, relative to the
+JSON's folder) and one annotation per valid subject: the 17 COCO keypoints as (x, y, v) with
+v = 2 visible, 1 in the image but occluded (by itself, a subject or an object), 0 outside
+(x = y = 0); the 6 foot points in ``foot_kpts`` (COCO-WholeBody order); the visible mask as
+uncompressed RLE (column-major runs, starting with background); its area and tight box
+[x, y, w, h]; the amodal box in ``bbox_amodal``. ``pycocotools`` reads and evaluates the file.
+"""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from synmitsuba.io.dataset import list_samples
+from synmitsuba.io.exr import read_sample
+from synmitsuba.io.preview import atomic_path
+
+COCO_KEYPOINTS = ["nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder",
+                  "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee",
+                  "right_knee", "left_ankle", "right_ankle"]
+COCO_SKELETON = [[16, 14], [14, 12], [17, 15], [15, 13], [12, 13], [6, 12], [7, 13], [6, 7], [6, 8], [7, 9], [8, 10],
+                 [9, 11], [2, 3], [1, 2], [1, 3], [2, 4], [3, 5], [4, 6], [5, 7]]
+
+
+def rle(mask: np.ndarray) -> dict:
+    """COCO uncompressed RLE of a boolean (H, W) mask."""
+    flat = np.asarray(mask, bool).ravel(order="F")
+    change = np.flatnonzero(np.diff(flat.astype(np.int8))) + 1
+    edges = np.concatenate([[0], change, [flat.size]])
+    counts = np.diff(edges).tolist()
+    if flat.size and flat[0]:
+        counts = [0] + counts
+    return {"size": [int(mask.shape[0]), int(mask.shape[1])], "counts": [int(c) for c in counts]}
+
+
+def _keypoints(rec: dict, first: int, count: int) -> list:
+    out = []
+    for (x, y), v in zip(np.asarray(rec["keypoints2d"])[first:first + count], rec["visibility"][first:first + count]):
+        flag = 0 if v == 0 else (2 if v == 1 else 1)
+        out += [float(x), float(y), flag] if flag else [0.0, 0.0, 0]
+    return out
+
+
+def _annotation(rec: dict, sample, image_id: int, ann_id: int) -> dict | None:
+    visible = sample.instance == rec["instance"]
+    if not rec["valid"] or not visible.any():
+        return None
+    box = rec["bbox_visible"]
+    kps = _keypoints(rec, 0, 17)
+    return {"id": ann_id, "image_id": image_id, "category_id": 1, "iscrowd": 0, "segmentation": rle(visible),
+            "area": float(visible.sum()), "bbox": [box[0], box[1], box[2] - box[0], box[3] - box[1]],
+            "keypoints": kps, "num_keypoints": int(sum(1 for v in kps[2::3] if v > 0)),
+            "foot_kpts": _keypoints(rec, 17, 6), "bbox_amodal": rec["bbox_amodal"], "instance": rec["instance"],
+            "visible_fraction": rec["visible_fraction"]}
+
+
+def export_coco(dataset_dir: str, out_json: str) -> dict:
+    """Write the COCO file for every sample under ``dataset_dir``; returns its counts."""
+    base = os.path.dirname(os.path.abspath(out_json))
+    images, anns = [], []
+    for image_id, stem in enumerate(list_samples(dataset_dir), 1):
+        sample = read_sample(stem)
+        images.append({"id": image_id, "file_name": os.path.relpath(f"{stem}.png", base),
+                       "width": sample.camera.width, "height": sample.camera.height})
+        for rec in sample.subjects:
+            ann = _annotation(rec, sample, image_id, len(anns) + 1)
+            if ann is not None:
+                anns.append(ann)
+    doc = {"info": {"description": "synmitsuba export", "version": "1"}, "images": images, "annotations": anns,
+           "categories": [{"id": 1, "name": "person", "supercategory": "person", "keypoints": COCO_KEYPOINTS,
+                           "skeleton": COCO_SKELETON}]}
+    with atomic_path(out_json) as tmp, open(tmp, "w") as fh:
+        json.dump(doc, fh)
+    return {"images": len(images), "annotations": len(anns)}
+
+
+BODY_MODEL_KEYS = ("betas", "global_orient", "body_pose", "transl", "left_hand_pose", "right_hand_pose", "jaw_pose",
+                   "leye_pose", "reye_pose", "expression")
+
+
+def _body_model_columns(rows: list, kind: str) -> dict:
+    """``<kind>.<param>`` (camera frame, as mmhuman3d keeps them) and ``<kind>_world.<param>``
+    for every row; ``<kind>.valid`` says which rows have a fit (zeros elsewhere) and
+    ``<kind>.fit_ok`` which of those passed the fit's error threshold."""
+    first = next((r for r in rows if f"{kind}_cam" in r), None)
+    if first is None:
+        return {}
+    out = {f"{kind}.valid": np.array([f"{kind}_cam" in r for r in rows]),
+           f"{kind}.fit_ok": np.array([bool(r.get(f"{kind}_cam", {}).get("fit", {}).get("ok", False)) for r in rows]),
+           f"{kind}.gender": np.array([r.get(f"{kind}_cam", {}).get("gender", "") for r in rows])}
+    for frame_name, suffix in (("", "cam"), ("_world", "world")):
+        for key in BODY_MODEL_KEYS:
+            if key in first[f"{kind}_{suffix}"]:
+                blank = np.zeros_like(np.asarray(first[f"{kind}_{suffix}"][key], np.float64))
+                out[f"{kind}{frame_name}.{key}"] = np.stack(
+                    [np.asarray(r[f"{kind}_{suffix}"][key], np.float64) if f"{kind}_{suffix}" in r else blank for r in rows])
+    return out
+
+
+def export_humandata(dataset_dir: str, out_npz: str) -> dict:
+    """One npz in the HumanData layout HMR training code reads (mmhuman3d): per valid subject
+    and sample ``image_path``, ``bbox_xywh`` (N, 5; last = 1), ``center`` (N, 2), ``scale`` (N,),
+    ``keypoints2d`` (N, 23, 3: x, y, 1 if inside the image), ``keypoints3d`` (N, 23, 4: camera
+    frame metres, same confidence), ``keypoints2d_mask`` / ``keypoints3d_mask`` (23,),
+    ``visibility`` (N, 23 classes), ``anny.rotations`` (N, J, 3 axis-angle, camera frame root),
+    ``anny.root_translation`` (N, 3), ``anny.rotations_world``, ``anny.root_translation_world``,
+    ``anny.root_world`` (N, 3: the world root trajectory), ``cam_param.K`` / ``.R`` / ``.T``
+    (world -> camera), ``instance``, ``frame``; with body-model fits, ``smplx.betas``,
+    ``smplx.global_orient``, ``smplx.body_pose``, ``smplx.transl``, hands, jaw, eyes,
+    ``smplx.expression`` (camera frame), the same under ``smplx_world.``, ``smplx.valid``,
+    ``smplx.fit_ok``, ``smplx.gender`` (and ``smpl.*``)."""
+    base = os.path.dirname(os.path.abspath(out_npz))
+    cols: dict = {}
+    rows: list = []
+
+    def add(key, value):
+        cols.setdefault(key, []).append(value)
+    for stem in list_samples(dataset_dir):
+        sample = read_sample(stem)
+        cam = sample.camera
+        for rec in sample.subjects:
+            if not rec["valid"] or rec["bbox_keypoints"] is None:
+                continue
+            conf = (rec["visibility"] > 0).astype(np.float32)[:, None]
+            box = rec["bbox_visible"] or rec["bbox_keypoints"]
+            add("image_path", os.path.relpath(f"{stem}.png", base))
+            add("bbox_xywh", [box[0], box[1], box[2] - box[0], box[3] - box[1], 1.0])
+            add("center", rec["center"])
+            add("scale", rec["scale"])
+            add("keypoints2d", np.concatenate([rec["keypoints2d"], conf], 1))
+            add("keypoints3d", np.concatenate([rec["keypoints3d_cam"], conf], 1))
+            add("visibility", rec["visibility"])
+            for frame_name, params in (("", rec["body_params_cam"]), ("_world", rec["body_params_world"])):
+                add(f"anny.rotations{frame_name}", params["rotations"])
+                add(f"anny.root_translation{frame_name}", params["root_translation"])
+            add("anny.root_world", rec["root_world"])
+            add("cam_param.K", cam.K)
+            add("cam_param.R", cam.R)
+            add("cam_param.T", cam.t)
+            add("instance", rec["instance"])
+            add("frame", sample.meta.get("frame", 0))
+            rows.append(rec)
+    arrays = {k: np.asarray(v) for k, v in cols.items()}
+    for kind in ("smplx", "smpl"):
+        arrays.update(_body_model_columns(rows, kind))
+    n_kp = 23
+    arrays["keypoints2d_mask"] = arrays["keypoints3d_mask"] = np.ones(n_kp, np.uint8)
+    with atomic_path(out_npz) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+    return {"subjects": len(cols.get("image_path", []))}

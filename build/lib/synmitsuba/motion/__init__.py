@@ -1,0 +1,13 @@
+"""Motion: procedural motions, BVH/AMASS import, retargeting, clips."""
+from synmitsuba._lazy import lazy_exports
+
+_EXPORTS = {"Motion": "synmitsuba.motion.motion", "load_bvh": "synmitsuba.motion.bvh",
+            "parse_bvh": "synmitsuba.motion.bvh", "BVHError": "synmitsuba.motion.bvh",
+            "load_amass": "synmitsuba.motion.amass", "smplx_skeleton": "synmitsuba.motion.amass",
+            "procedural_motion": "synmitsuba.motion.procedural", "MOTION_KINDS": "synmitsuba.motion.procedural:KINDS",
+            "foot_sliding": "synmitsuba.motion.procedural", "retarget": "synmitsuba.motion.retargeting",
+            "humanoid_skeleton": "synmitsuba.motion.humanoid", "MotionLibrary": "synmitsuba.motion.library",
+            "random_window": "synmitsuba.motion.library", "is_allowed": "synmitsuba.motion.library",
+            "load_motion": "synmitsuba.motion.sources"}
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

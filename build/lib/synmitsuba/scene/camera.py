@@ -1,0 +1,119 @@
+"""Pinhole cameras in the OpenCV convention.
+
+Camera frame: x right, y down, z forward. ``K`` is 3x3 in pixels with pixel centres at
+integer + 0.5 (pixel (0, 0) spans [0, 1) x [0, 1)). ``R``, ``t`` map world to camera:
+``x_cam = R @ x_world + t``. Any K works (off-centre principal point, fx != fy, skew).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import camera_ray_matrix, frame
+from synmitsuba.schema import POSITIVE as PIXELS
+
+
+def _matrix(name: str, value, shape) -> np.ndarray:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != shape:
+        raise ConfigError(name, np.asarray(value).tolist() if arr.size < 20 else f"array{arr.shape}",
+                          f"give a {shape[0]}x{shape[1] if len(shape) > 1 else ''} array".rstrip("x"))
+    if not np.isfinite(arr).all():
+        raise ConfigError(name, arr.tolist(), "all entries must be finite numbers")
+    return arr
+
+
+@dataclass
+class Camera:
+    """A pinhole camera: intrinsics ``K`` (pixels), world->camera ``R``, ``t``, image size."""
+
+    K: np.ndarray
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))
+    t: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    width: int = 320
+    height: int = 240
+
+    def __post_init__(self):
+        self.K = _matrix("camera.K", self.K, (3, 3))
+        self.R = _matrix("camera.R", self.R, (3, 3))
+        self.t = _matrix("camera.t", self.t, (3,))
+        self.width = PIXELS("camera.width", self.width)
+        self.height = PIXELS("camera.height", self.height)
+        if not np.allclose(self.K[2], [0, 0, 1]):
+            raise ConfigError("camera.K", self.K.tolist(), "the last row of K must be [0, 0, 1]")
+        if self.K[0, 0] <= 0 or self.K[1, 1] <= 0:
+            raise ConfigError("camera.K", self.K.tolist(), "fx = K[0][0] and fy = K[1][1] must be > 0 (pixels)")
+        if self.K[1, 0] != 0:
+            raise ConfigError("camera.K", self.K.tolist(), "K[1][0] must be 0: an OpenCV K is upper triangular "
+                              "[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]")
+        if not np.allclose(self.R @ self.R.T, np.eye(3), atol=1e-6) or np.linalg.det(self.R) < 0:
+            raise ConfigError("camera.R", self.R.tolist(), "R must be a rotation (orthonormal, det +1)")
+
+    # -- construction ------------------------------------------------------------------
+    @staticmethod
+    def intrinsics(fov_y_deg: float, width: int, height: int) -> np.ndarray:
+        """K for a vertical field of view with square pixels and a centred principal point."""
+        if not 0 < fov_y_deg < 180:
+            raise ConfigError("camera.fov_y_deg", fov_y_deg, "give a field of view in (0, 180) degrees")
+        f = 0.5 * height / np.tan(np.radians(fov_y_deg) / 2)
+        return np.array([[f, 0, width / 2], [0, f, height / 2], [0, 0, 1.0]])
+
+    @classmethod
+    def look_at(cls, eye, target, up=(0.0, 1.0, 0.0), fov_y_deg: float = 45.0,
+                width: int = 320, height: int = 240, K=None) -> "Camera":
+        """A camera at ``eye`` looking at ``target`` with ``up`` pointing up in the image."""
+        eye = _matrix("camera.eye", eye, (3,))
+        target = _matrix("camera.target", target, (3,))
+        up = _matrix("camera.up", up, (3,))
+        if np.linalg.norm(target - eye) < 1e-9:
+            raise ConfigError("camera.target", target.tolist(), "target must differ from eye")
+        try:
+            F = frame(target - eye, up, keep="forward")
+        except ValueError:
+            raise ConfigError("camera.up", up.tolist(), "up must not be parallel to the viewing direction") from None
+        R = np.stack([-F[:, 0], -F[:, 1], F[:, 2]])  # OpenCV: x right (= -side), y down, z forward
+        K = cls.intrinsics(fov_y_deg, width, height) if K is None else K
+        return cls(K=K, R=R, t=-R @ eye, width=width, height=height)
+
+    # -- geometry ----------------------------------------------------------------------
+    @property
+    def center(self) -> np.ndarray:
+        """Camera centre in world coordinates."""
+        return -self.R.T @ self.t
+
+    @property
+    def ray_matrix(self) -> np.ndarray:
+        """``R^T K^-1``: pixel [u, v, 1] -> world ray direction (not normalised)."""
+        return camera_ray_matrix(self.K, self.R)
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """World points (N, 3) -> pixel coordinates (N, 2) and z-depth (N,)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3) @ self.R.T + self.t
+        uvw = p @ self.K.T
+        return uvw[:, :2] / uvw[:, 2:3], p[:, 2]
+
+    def pixel_rays(self, offsets=None) -> np.ndarray:
+        """Unit world-space directions through pixel centres (H, W, 3), or through
+        ``pixel + offsets`` when offsets (..., 2) in [0, 1) are given (broadcast per pixel)."""
+        u, v = np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64))
+        pix = np.stack([u, v], -1)
+        pix = pix + (0.5 if offsets is None else np.asarray(offsets))
+        ones = np.ones(pix.shape[:-1] + (1,))
+        d = np.concatenate([pix, ones], -1) @ self.ray_matrix.T
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def resized(self, width: int, height: int) -> "Camera":
+        """The same camera at another resolution (K scaled per axis)."""
+        S = np.diag([width / self.width, height / self.height, 1.0])
+        return Camera(K=S @ self.K, R=self.R, t=self.t, width=width, height=height)
+
+    # -- serialization -----------------------------------------------------------------
+    def to_dict(self) -> dict:
+        return {"K": self.K.tolist(), "R": self.R.tolist(), "t": self.t.tolist(),
+                "width": self.width, "height": self.height, "convention": "opencv_world_to_camera"}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Camera":
+        return cls(K=d["K"], R=d["R"], t=d["t"], width=d["width"], height=d["height"])
