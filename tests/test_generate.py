@@ -123,10 +123,43 @@ def test_stats_count_what_the_manifest_lists(tiny):
     assert run.returncode == 2 and "no complete samples" in run.stderr
 
 
-@pytest.mark.slow
 def test_ray_writes_the_same_files_as_the_local_pool(tiny, tmp_path):
-    pytest.importorskip("ray")
     run = _generate(tmp_path / "ray", "--executor", "ray", "--workers", "2")
     assert run.returncode == 0, run.stderr
     a, b = _files(tiny), _files(tmp_path / "ray")
     assert sorted(a) == sorted(b) and [k for k in a if a[k] != b[k] and k != "manifest.jsonl"] == []
+
+
+def _quick_task(config, index, out):
+    """A stand-in sequence (the orchestration is under test, not rendering): sequence 1 raises,
+    sequence 4 kills its worker process, the others finish after a short while."""
+    time.sleep(0.3)
+    if index == 1:
+        raise ValueError(f"sequence {index} cannot be composed")
+    if index == 4:
+        os._exit(3)
+    name = f"seq_{index:06d}"
+    os.makedirs(os.path.join(out, name))
+    return {"sequence": index, "folder": name, "samples": [], "frames": 1, "views": 1, "seconds": 0.3,
+            "pid": os.getpid(), "peak_rss_mb": 0.0, "rss_mb": 0.0}
+
+
+def test_failures_are_logged_with_tracebacks_and_charged_to_their_own_sequence(tmp_path):
+    """Two workers, six sequences: the one that raises and the one whose worker dies are each
+    tried max_failures + 1 times with every traceback in run.log; a pool that broke under two
+    running sequences charges neither until one breaks a pool alone; the rest complete once."""
+    import synmitsuba as sm
+    from synmitsuba.generate.run import generate
+    cfg = sm.load_generate_config(TINY, ["sequences=6"])
+    summary = generate(cfg, tmp_path, workers=2, max_failures=1, progress=False, task=_quick_task)
+    assert sorted(summary.done) == [0, 2, 3, 5] and sorted(summary.failed) == [1, 4]
+    assert summary.failed[1] == "ValueError: sequence 1 cannot be composed"
+    assert summary.failed[4].startswith("a worker died")
+    log = [json.loads(x) for x in (tmp_path / "run.log").read_text().splitlines()]
+    failures = [e for e in log if "failed" in e]
+    assert sorted((e["sequence"], e["attempt"]) for e in failures) == [(1, 1), (1, 2), (4, 1), (4, 2)]
+    assert all('raise ValueError(f"sequence {index} cannot be composed")' in e["traceback"]
+               for e in failures if e["sequence"] == 1)
+    assert all(e["worker_died"] for e in failures if e["sequence"] == 4)
+    assert sorted(e["sequence"] for e in log if "seconds" in e) == [0, 2, 3, 5]  # each finished exactly once
+

@@ -1,7 +1,10 @@
 """``synmitsuba generate CONFIG --out DIR``: render a dataset, one task per sequence."""
 from __future__ import annotations
 
+import os
+
 from synmitsuba.cli.args import natural_int, positive_int
+from synmitsuba.generate.executors import EXECUTORS
 
 
 def run(args) -> int:
@@ -18,6 +21,8 @@ def run(args) -> int:
     print(f"{args.out}: {summary.line()}")
     for i, err in sorted(summary.failed.items()):
         print(f"  sequence {i} failed: {err}")
+    if summary.failed:
+        print(f"  (each failure's traceback is in {os.path.join(args.out, 'run.log')})")
     return 1 if summary.failed else 0
 
 
@@ -32,7 +37,7 @@ def add_parser(sub) -> None:
     p.add_argument("--sequences", type=positive_int, help="sequences (default: the config's)")
     p.add_argument("--seed", type=natural_int, help="global seed (default: the config's)")
     p.add_argument("--workers", type=positive_int, default=1, help="parallel sequences; threads per worker = cores / workers")
-    p.add_argument("--executor", choices=("local", "ray"), default="local", help="local process pool or Ray")
+    p.add_argument("--executor", choices=tuple(EXECUTORS), default="local", help="local process pool or Ray")
     p.add_argument("--ray-address", help="Ray cluster address (default: a local Ray)")
     p.add_argument("--max-failures", type=natural_int, default=2, help="retries of a failing sequence before it is reported")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config value, e.g. render.spp=16 "

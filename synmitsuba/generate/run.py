@@ -15,13 +15,13 @@ import shutil
 import socket
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.generate.config import GenerateConfig
-
-EXECUTORS = ("local", "ray")
+from synmitsuba.generate.executors import EXECUTORS, Failure
 
 
 def sequence_rng(seed: int, index: int) -> np.random.Generator:
@@ -143,14 +143,13 @@ def check_output(out: str) -> str:
     return out
 
 
-def _worker_init(threads: int) -> None:
-    os.environ["SYNMITSUBA_THREADS"] = str(threads)
-
-
 def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str = "local", ray_address: str | None = None,
-             max_failures: int = 2, progress: bool = True) -> Summary:
+             max_failures: int = 2, progress: bool = True, task: Callable = None) -> Summary:
     """Render every sequence of ``config`` not yet in ``out``'s manifest; retry a failing one up to
-    ``max_failures`` times, then report it (never dropped silently)."""
+    ``max_failures`` times, then report it (never dropped silently). Every failure's traceback
+    goes to ``run.log``; ``Summary.failed`` keeps its one-line summary. ``executor`` names one
+    of ``EXECUTORS``; ``task(config_dict, index, out)`` is ``run_sequence`` unless given (a
+    top-level function, so spawned workers can import it)."""
     if executor not in EXECUTORS:
         raise ConfigError("--executor", executor, f"use one of {', '.join(EXECUTORS)}")
     out = check_output(out)
@@ -162,10 +161,42 @@ def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str =
     todo = [i for i in range(config.sequences) if i not in done]
     summary = Summary(skipped=sorted(i for i in done if i < config.sequences))
     t0 = time.perf_counter()
-    run = _run_ray if executor == "ray" else _run_local
-    run(config.to_dict(), todo, out, workers, max_failures, summary, progress, ray_address)
+    pool = EXECUTORS[executor](task or run_sequence, config.to_dict(), out, workers, ray_address)
+    try:
+        _drive(pool, todo, out, max_failures, summary, progress)
+    finally:
+        pool.close()
     summary.seconds = time.perf_counter() - t0
     return summary
+
+
+def _drive(pool, todo: list, out: str, max_failures: int, summary: Summary, progress: bool) -> None:
+    """Submit every sequence, then take outcomes as they come: append the complete ones, log
+    and resubmit the failed ones until their tries are spent."""
+    attempts = {i: 0 for i in todo}
+    images = [0]
+    for i in todo:
+        pool.submit(i)
+    with _bar(len(todo), progress) as bar:
+        for outcome in pool.as_completed():
+            if outcome.failure is None:
+                _finish(out, outcome.entry, summary, bar, images)
+                continue
+            attempts[outcome.index] += 1
+            final = attempts[outcome.index] > max_failures
+            _log_failure(out, outcome.failure, attempts[outcome.index], final)
+            if final:
+                summary.failed[outcome.index] = outcome.failure.summary
+            else:
+                pool.submit(outcome.index)
+
+
+def _log_failure(out: str, failure: Failure, attempt: int, final: bool) -> None:
+    """One run.log line per failed attempt, with the whole traceback."""
+    with open(os.path.join(out, "run.log"), "a") as fh:
+        fh.write(json.dumps({"sequence": failure.index, "attempt": attempt, "failed": failure.summary,
+                             "worker_died": failure.worker_died, "final": final, "traceback": failure.traceback,
+                             "host": socket.gethostname()}) + "\n")
 
 
 def _bar(total: int, progress: bool):
@@ -179,63 +210,3 @@ def _finish(out, entry, summary, bar, frames) -> None:
     frames[0] += entry["frames"] * entry["views"]
     bar.set_postfix(images_per_s=f"{frames[0] / max(bar.format_dict['elapsed'], 1e-9):.2f}")
     bar.update(1)
-
-
-def _run_local(cfg: dict, todo: list, out: str, workers: int, max_failures: int, summary: Summary, progress: bool,
-               _address=None) -> None:
-    """A spawn process pool; a sequence whose worker dies (killed, out of memory) is retried
-    like a failing one, on a fresh pool."""
-    import multiprocessing as mp
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
-    threads = max(1, (os.cpu_count() or 1) // max(1, workers))
-    attempts = {i: 0 for i in todo}
-    queue, frames = list(todo), [0]
-    with _bar(len(todo), progress) as bar:
-        while queue:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
-                                     initializer=_worker_init, initargs=(threads,)) as pool:
-                pending = {pool.submit(run_sequence, cfg, i, out): i for i in queue}
-                queue = []
-                while pending:
-                    finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                    for fut in finished:
-                        i = pending.pop(fut)
-                        try:
-                            _finish(out, fut.result(), summary, bar, frames)
-                            continue
-                        except BrokenProcessPool as exc:
-                            error = f"a worker died ({exc})"
-                        except Exception as exc:  # noqa: BLE001 - reported by sequence, retried a bounded number of times
-                            error = f"{type(exc).__name__}: {exc}"
-                        attempts[i] += 1
-                        if attempts[i] > max_failures:
-                            summary.failed[i] = error
-                        elif "worker died" in error:
-                            queue.append(i)  # the pool is broken: rerun on a fresh one
-                        else:
-                            pending[pool.submit(run_sequence, cfg, i, out)] = i
-
-
-def _run_ray(cfg: dict, todo: list, out: str, workers: int, max_failures: int, summary: Summary, progress: bool,
-             address=None) -> None:
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError("--executor", "ray", "Ray is not installed: pip install 'synmitsuba[ray]'") from None
-    if not ray.is_initialized():
-        ray.init(address=address, num_cpus=None if address else (os.cpu_count() or 1), include_dashboard=False,
-                 log_to_driver=False)
-    threads = max(1, (os.cpu_count() or 1) // max(1, workers))
-    task = ray.remote(num_cpus=threads, max_retries=max_failures, retry_exceptions=True,
-                      runtime_env={"env_vars": {"SYNMITSUBA_THREADS": str(threads)}})(run_sequence)
-    refs = {task.remote(cfg, i, out): i for i in todo}
-    frames = [0]
-    with _bar(len(todo), progress) as bar:
-        while refs:
-            ready, _ = ray.wait(list(refs), num_returns=1)
-            i = refs.pop(ready[0])
-            try:
-                _finish(out, ray.get(ready[0]), summary, bar, frames)
-            except Exception as exc:  # noqa: BLE001 - Ray already retried it max_failures times
-                summary.failed[i] = f"{type(exc).__name__}: {exc}"
