@@ -11,7 +11,7 @@ export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
 
 PROBE := $(PY) -c "from synmitsuba.engine.llvm import main; raise SystemExit(main(['--probe']))"
 
-.PHONY: setup llvm demo test test-all bench bench-cycles clean
+.PHONY: setup llvm demo lint test test-all bench bench-cycles clean
 
 setup: $(STAMP) llvm
 
@@ -45,7 +45,10 @@ bench-cycles: setup   # Blender Cycles (bpy from PyPI, in its own environment) a
 	test -x .bpy/bin/python || ($(PYTHON) -m venv .bpy && .bpy/bin/pip install -q bpy)
 	$(PY) bench/render_quality.py --bpy .bpy/bin/python --images out/bench
 
-test: setup
+lint: setup
+	$(VENV)/bin/ruff check synmitsuba tests bench
+
+test: setup lint
 	$(PY) -m pytest -q
 
 test-all: setup

@@ -3,9 +3,10 @@
 Each pixel-centre ray of frame f hits a surface point: a triangle and its barycentric
 coordinates (meshes), or a curve segment, the share along it and the offset from its axis
 (hair). That same material point is taken to frame g (the triangle's vertices at g; the
-segment's control points at g, plus the offset) and projected with g's camera: flow = its pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at
-g, 1 hidden at g (the ray from g's eye meets another surface first), 2 outside g's image or
-behind its camera, 3 nothing hit at f (background: flow 0).
+segment's control points at g, plus the offset) and projected with g's camera: flow = its
+pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at g, 1 hidden at g
+(the ray from g's eye meets another surface first), 2 outside g's image or behind its camera,
+3 nothing hit at f (background: flow 0).
 """
 from __future__ import annotations
 

@@ -100,7 +100,8 @@ class LayeredHuman:
         self._incidence = incidence(body.faces, len(body.vertices))
         self._around = body.surface().around
         size = recipe.texture_size
-        self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin_material(recipe.skin, anny_uv_masks(skin_size(size)), skin_size(size)),
+        skin = skin_material(recipe.skin, anny_uv_masks(skin_size(size)), skin_size(size))
+        self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin,
                                          body.vertices[self.split.source], self.split.faces, self.split.uv,
                                          body.weights[self.split.source])]
         self.garments: list[GarmentMesh] = []
@@ -174,7 +175,9 @@ class LayeredHuman:
                 uv, metres = acc.mask_uv(self.head, v)
                 mat = dataclasses.replace(mat, roughness=0.9, normal_map=fabric_normal_map("plain"),
                                           normal_map_repeat=fabric_repeat("plain", metres))
-            self.parts.append(_Part(f"{p.kind}", acc.LAYER, mat, v, f, uv, self.body.weights[near]))
+            n = sum(q.kind == p.kind for q in self.recipe.accessories[:i])  # a second watch is watch_2
+            self.parts.append(_Part(p.kind if n == 0 else f"{p.kind}_{n + 1}", acc.LAYER, mat, v, f, uv,
+                                    self.body.weights[near]))
             if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
                 self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
             if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask

@@ -272,7 +272,8 @@ def fabric_height(fabric: str, size: int = 64) -> np.ndarray:
     if fabric == "jersey":
         a, b = (2 * x) % 1.0 - 0.5, (2 * y) % 1.0  # across a wale (centred), up a course
         leg = np.abs(a) - (0.08 + 0.3 * b)        # across each leg of the loop's V, widening upwards
-        return np.sqrt(np.clip(1.0 - (leg / 0.16) ** 2, 0.0, 1.0)) * np.sin(np.pi * b) ** 0.3  # loops tuck under at a course's ends
+        # loops tuck under at a course's ends
+        return np.sqrt(np.clip(1.0 - (leg / 0.16) ** 2, 0.0, 1.0)) * np.sin(np.pi * b) ** 0.3
     return np.zeros((size, size))
 
 

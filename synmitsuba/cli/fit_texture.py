@@ -29,7 +29,8 @@ def _make_targets(args, recipe) -> int:
     output_dir(args.targets, "TARGETS")
     scene = rest_scene(recipe, args.radiance)
     for i, cam in enumerate(_ring(args.make_targets, args.size)):
-        print(write_sample(render(scene, cam, spp=args.target_spp, seed=100 + i), os.path.join(args.targets, f"view{i:02d}"))["exr"])
+        sample = render(scene, cam, spp=args.target_spp, seed=100 + i)
+        print(write_sample(sample, os.path.join(args.targets, f"view{i:02d}"))["exr"])
     return 0
 
 

@@ -100,7 +100,8 @@ class CameraSpec(Params):
 
     def __post_init__(self):
         if (self.look_at is None) == (self.K is None):
-            raise ConfigError("camera", "look_at" if self.look_at else None, "give either look_at: {eye, target} or K (with R, t)")
+            raise ConfigError("camera", "look_at" if self.look_at else None,
+                              "give either look_at: {eye, target} or K (with R, t)")
 
 
 @dataclass(kw_only=True)

@@ -18,8 +18,8 @@ def draw_topdown(spec: SceneSpec, size: int = 640) -> np.ndarray:
     env = load_environment(spec.environment)
     boxes = object_boxes(env)
     eyes = np.concatenate([[c.center for c in v.cameras] for v in spec.views]) if spec.views else np.zeros((0, 3))
-    pts = np.concatenate([boxes[:, [0, 2]], boxes[:, [3, 5]], eyes[:, [0, 2]],
-                          np.reshape(env.area, (2, 2))]) if len(boxes) else np.concatenate([eyes[:, [0, 2]], np.reshape(env.area, (2, 2))])
+    corners = [boxes[:, [0, 2]], boxes[:, [3, 5]]] if len(boxes) else []
+    pts = np.concatenate([*corners, eyes[:, [0, 2]], np.reshape(env.area, (2, 2))])
     lo, hi = pts.min(0) - 1.0, pts.max(0) + 1.0
     scale = (size - 1) / float((hi - lo).max())
 

@@ -164,7 +164,8 @@ def _to_motion(joints: list, data: np.ndarray, fps: float, path: str, units, lab
                     root[:, a] = data[:, idx[f"{axis}position"]] - offsets[0, a]
         col += len(chans)
     skel = Skeleton(tuple(names), parents, rest * s)
-    return Motion(skel, rotations, root * s, fps, labels=tuple(labels), source=os.path.abspath(path) if os.path.exists(path) else path,
+    source = os.path.abspath(path) if os.path.exists(path) else path
+    return Motion(skel, rotations, root * s, fps, labels=tuple(labels), source=source,
                   meta={"metres_per_unit": s})
 
 
