@@ -59,7 +59,7 @@ def main(argv=None) -> dict:
     import synmitsuba as sm
     from synmitsuba.compose.stage import preview_stage
     from synmitsuba.engine.build import STATS, build, settle_frame_memory
-    from synmitsuba.rendering.denoise import choose_sampler
+    from synmitsuba.engine.settings import choose_sampler
     sm.set_variant()
     scene = preview_stage()
     subjects = cached(args.subjects, lambda: build_subjects(args.frames, args.count))[:args.count]

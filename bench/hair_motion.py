@@ -13,10 +13,14 @@ and clearing adds). Prints JSON.
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 import json
 import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
 
 MOTIONS = ("walk", "run", "squat", "jump", "wave")
 STYLES = ("long", "shoulder", "bob")
@@ -37,7 +41,7 @@ def head_poses(sk):
 
 def inside_share(h, layers, points) -> tuple[int, float]:
     from synmitsuba.body.binding import signed_distance
-    from synmitsuba.geometry import winding_numbers
+    from reference import winding_numbers  # tests/reference.py: the independent check
     body = np.empty_like(h.body.vertices)
     body[h.split.source] = layers[0].vertices
     d = signed_distance(body, h.body.faces, points, k=8)

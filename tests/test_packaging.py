@@ -1,6 +1,7 @@
 """The package as a user installs it: a wheel (no editable install), run from another folder."""
 import json
 import pathlib
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -9,9 +10,12 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def test_a_wheel_installed_in_a_fresh_venv_generates_a_shipped_config_and_lists_environments(tmp_path):
-    wheels = tmp_path / "wheels"
+    src, wheels = tmp_path / "src", tmp_path / "wheels"  # built from a copy: no build/ left in the checkout
+    shutil.copytree(ROOT / "synmitsuba", src / "synmitsuba", ignore=shutil.ignore_patterns("__pycache__"))
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, src / name)
     subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(wheels),
-                    str(ROOT)], check=True, capture_output=True)
+                    str(src)], check=True, capture_output=True)
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
     python = venv / "bin" / "python"

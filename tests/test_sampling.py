@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from synmitsuba.rendering.denoise import choose_sampler
+from synmitsuba.engine.settings import choose_sampler
 
 
 def test_auto_sampler_keeps_the_requested_sample_count(sm):

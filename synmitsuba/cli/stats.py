@@ -7,7 +7,7 @@ import os
 
 def run(args) -> int:
     from synmitsuba.data.stats import dataset_stats, stats_figure, summarise
-    from synmitsuba.io.preview import atomic_path
+    from synmitsuba.io.files import atomic_path
     stats = dataset_stats(args.dataset)
     png = args.out or os.path.join(args.dataset, "stats.png")
     print(stats_figure(stats, png))

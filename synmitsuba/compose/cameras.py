@@ -22,7 +22,6 @@ import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.schema import Choice, ListOf, Number, Params, POSITIVE, Range, spec
-from synmitsuba.scene.camera import Camera
 
 MOTIONS = ("static", "tracking", "orbit", "dolly_zoom", "handheld")
 
@@ -102,10 +101,6 @@ class Trajectory:
     target: np.ndarray
     up: np.ndarray
     K: np.ndarray
-
-    def cameras(self, width: int, height: int) -> list[Camera]:
-        return [Camera.look_at(self.eye[f], self.target[f], self.up[f], width=width, height=height, K=self.K[f])
-                for f in range(len(self.eye))]
 
 
 def _direction(azimuth: float, pitch: float) -> np.ndarray:

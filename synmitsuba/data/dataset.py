@@ -23,7 +23,7 @@ import json
 import numpy as np
 
 from synmitsuba.errors import ConfigError
-from synmitsuba.io.dataset import list_samples
+from synmitsuba.io.listing import list_samples
 from synmitsuba.io.exr import read_sample
 
 CROPS = (None, "person")

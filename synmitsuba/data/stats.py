@@ -11,7 +11,7 @@ import os
 import numpy as np
 
 from synmitsuba.errors import ConfigError
-from synmitsuba.io.dataset import list_samples
+from synmitsuba.io.listing import list_samples
 
 VISIBILITY_NAMES = ("outside", "visible", "self_occluded", "occluded_by_subject", "occluded_by_object")
 
@@ -75,7 +75,7 @@ def stats_figure(stats: dict, path: str) -> str:
     matplotlib backend is left as it was)."""
     from matplotlib.figure import Figure
 
-    from synmitsuba.io.preview import atomic_path
+    from synmitsuba.io.files import atomic_path
     hists = ("visible_fraction", "subject_height_m", "stature_m", "bmi", "camera_distance_m", "camera_pitch_deg",
              "skin_ita_deg")
     bars = ("keypoint_visibility", "garments", "motions")

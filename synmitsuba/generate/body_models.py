@@ -16,7 +16,7 @@ from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.errors import ConfigError
 from synmitsuba.generate.run import manifest_entries
-from synmitsuba.io.dataset import list_samples
+from synmitsuba.io.listing import list_samples
 from synmitsuba.io.exr import update_subjects
 from synmitsuba.scene.camera import Camera
 

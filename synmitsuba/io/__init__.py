@@ -3,7 +3,7 @@ HumanData exports."""
 from synmitsuba._lazy import lazy_exports
 
 _EXPORTS = {"write_sample": "synmitsuba.io.exr", "read_sample": "synmitsuba.io.exr",
-            "list_samples": "synmitsuba.io.dataset",
+            "list_samples": "synmitsuba.io.listing",
             "to_srgb8": "synmitsuba.io.preview", "write_png": "synmitsuba.io.preview",
             "contact_sheet": "synmitsuba.io.preview", "export_coco": "synmitsuba.io.coco",
             "export_humandata": "synmitsuba.io.coco",

@@ -14,9 +14,9 @@ import os
 
 import numpy as np
 
-from synmitsuba.io.dataset import list_samples
+from synmitsuba.io.listing import list_samples
 from synmitsuba.io.exr import read_sample
-from synmitsuba.io.preview import atomic_path
+from synmitsuba.io.files import atomic_path
 
 COCO_KEYPOINTS = ["nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder",
                   "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee",

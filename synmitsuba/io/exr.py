@@ -16,7 +16,8 @@ import sys
 import numpy as np
 
 from synmitsuba.errors import ConfigError
-from synmitsuba.io.preview import atomic_path, to_srgb8, write_png
+from synmitsuba.io.files import atomic_path
+from synmitsuba.io.preview import to_srgb8, write_png
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 

@@ -1,44 +1,18 @@
 """sRGB previews of linear renders (IEC 61966-2-1 encoding) and PNG writing."""
 from __future__ import annotations
 
-import contextlib
 import os
 
 import numpy as np
 
 from synmitsuba._colour import srgb_encode
+from synmitsuba.io.files import atomic_path
 
 
 def to_srgb8(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     """Linear RGB (..., 3) -> uint8 sRGB with the IEC 61966-2-1 curve, clipped to [0, 1]."""
     lin = np.clip(np.nan_to_num(np.asarray(rgb, dtype=np.float64) * 2.0 ** exposure), 0.0, 1.0)
     return np.round(srgb_encode(lin) * 255.0).astype(np.uint8)
-
-
-# temporaries being written now: an interrupt handler that must exit at once removes them
-ACTIVE_TEMPORARIES: set = set()
-
-
-@contextlib.contextmanager
-def atomic_path(path: str):
-    """A temporary name beside ``path`` (same extension) renamed to ``path`` when the block
-    ends cleanly, removed when it does not (an error, Ctrl-C): a file is complete or absent."""
-    root, ext = os.path.splitext(os.fspath(path))
-    tmp = f"{root}.tmp-{os.getpid()}{ext}"
-    ACTIVE_TEMPORARIES.add(tmp)
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        remove_temporaries({tmp})
-
-
-def remove_temporaries(paths=None) -> None:
-    """Remove temporaries still being written (all of them by default)."""
-    for tmp in list(ACTIVE_TEMPORARIES if paths is None else paths):
-        ACTIVE_TEMPORARIES.discard(tmp)
-        if os.path.exists(tmp):
-            os.remove(tmp)
 
 
 def write_png(path: str, image: np.ndarray, compress_level: int = 6) -> str:

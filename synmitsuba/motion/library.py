@@ -88,10 +88,3 @@ class MotionLibrary:
 
     def filter(self, min_seconds: float = CLIP_SECONDS, excluded=EXCLUDED_LABELS) -> "MotionLibrary":
         return MotionLibrary([e for e in self.entries if e.seconds >= min_seconds and is_allowed(e.labels, excluded)])
-
-    def sample_clip(self, rng: np.random.Generator, seconds: float = CLIP_SECONDS, fps: float = CLIP_FPS) -> Motion:
-        usable = self.filter(seconds).entries
-        if not usable:
-            raise ConfigError("motion library", len(self.entries), f"no motion of at least {seconds} s passes the filters")
-        entry = usable[int(rng.integers(len(usable)))]
-        return random_window(entry.load(rng, seconds), rng, seconds, fps)

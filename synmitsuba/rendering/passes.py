@@ -20,7 +20,8 @@ from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.rendering import sensor as sensor_mod
 from synmitsuba.engine.build import build
 from synmitsuba.engine.settings import DENOISERS
-from synmitsuba.rendering.denoise import choose_sampler, guides, oidn
+from synmitsuba.engine.settings import choose_sampler
+from synmitsuba.rendering.denoise import guides, oidn
 from synmitsuba.engine.variant import require_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
