@@ -22,18 +22,31 @@ from synmitsuba.schema import Choice, Number, Params, spec
 from synmitsuba.geometry import frame, triangle_areas
 
 REGIONS = ("fringe", "top", "temporal", "occipital", "lower_back", "beard")
-# style -> length (m) per scalp region (fringe, top, temporal, occipital, lower_back), gravity, volume
+
+
+@dataclass(frozen=True)
+class HairStyle:
+    """A hair style: strand length (m) per scalp region, how it falls and how often it is worn
+    (our rough prior, not survey data)."""
+
+    lengths: tuple  # metres per scalp region: fringe, top, temporal, occipital, lower_back
+    gravity: float  # how far strands fall rather than follow the scalp (negative: stand out)
+    volume: float   # how far they stand off the head
+    odds_male: float
+    odds_female: float
+
+
 STYLES = {
-    "bald": (0, 0, 0, 0, 0, 0.0, 0.0),
-    "buzz": (0.008, 0.01, 0.008, 0.008, 0.006, 0.0, 0.3),
-    "short": (0.04, 0.05, 0.03, 0.04, 0.025, 0.4, 0.5),
-    "crew": (0.03, 0.06, 0.015, 0.02, 0.012, 0.2, 0.6),
-    "bob": (0.10, 0.16, 0.16, 0.17, 0.15, 0.9, 0.4),
-    "shoulder": (0.12, 0.26, 0.26, 0.28, 0.26, 1.0, 0.3),
-    "long": (0.16, 0.42, 0.42, 0.45, 0.42, 1.0, 0.25),
-    "curly": (0.08, 0.12, 0.10, 0.12, 0.10, 0.5, 0.9),
-    "afro": (0.09, 0.11, 0.10, 0.10, 0.08, -0.2, 1.0),
-    "fringe": (0.12, 0.10, 0.07, 0.08, 0.06, 0.8, 0.4),
+    "bald": HairStyle((0, 0, 0, 0, 0), 0.0, 0.0, 0.08, 0.005),
+    "buzz": HairStyle((0.008, 0.01, 0.008, 0.008, 0.006), 0.0, 0.3, 0.14, 0.015),
+    "short": HairStyle((0.04, 0.05, 0.03, 0.04, 0.025), 0.4, 0.5, 0.26, 0.08),
+    "crew": HairStyle((0.03, 0.06, 0.015, 0.02, 0.012), 0.2, 0.6, 0.20, 0.02),
+    "bob": HairStyle((0.10, 0.16, 0.16, 0.17, 0.15), 0.9, 0.4, 0.02, 0.20),
+    "shoulder": HairStyle((0.12, 0.26, 0.26, 0.28, 0.26), 1.0, 0.3, 0.06, 0.24),
+    "long": HairStyle((0.16, 0.42, 0.42, 0.45, 0.42), 1.0, 0.25, 0.05, 0.22),
+    "curly": HairStyle((0.08, 0.12, 0.10, 0.12, 0.10), 0.5, 0.9, 0.08, 0.10),
+    "afro": HairStyle((0.09, 0.11, 0.10, 0.10, 0.08), -0.2, 1.0, 0.06, 0.05),
+    "fringe": HairStyle((0.12, 0.10, 0.07, 0.08, 0.06), 0.8, 0.4, 0.05, 0.07),
 }
 HAIRLINE_TOP, BANGS_TOP = 0.45, 0.15  # relative heights over the head centre: hair over the face stops there
 K = 10  # control points per strand: enough for a smooth fall and one or two curls
@@ -58,11 +71,11 @@ class HairParams(Params):
     seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
 
-# Who wears what: our rough prior (not survey data), style odds per sex in ``STYLES`` order, and
-# beard odds for men by age in years (none, stubble, goatee, mustache, full); women and people
-# under 18 get no beard.
-STYLE_ODDS = {"male": (0.08, 0.14, 0.26, 0.20, 0.02, 0.06, 0.05, 0.08, 0.06, 0.05),
-              "female": (0.005, 0.015, 0.08, 0.02, 0.20, 0.24, 0.22, 0.10, 0.05, 0.07)}
+# Who wears what: style odds per sex in ``STYLES`` order (from each style's record), and beard
+# odds for men by age in years (none, stubble, goatee, mustache, full); women and people under
+# 18 get no beard.
+STYLE_ODDS = {"male": tuple(s.odds_male for s in STYLES.values()),
+              "female": tuple(s.odds_female for s in STYLES.values())}
 BEARD_ODDS = ((18, (0.55, 0.20, 0.08, 0.04, 0.13)),   # from 18 years
               (30, (0.50, 0.18, 0.10, 0.06, 0.16)),   # from 30
               (50, (0.55, 0.10, 0.08, 0.12, 0.15)))   # from 50
@@ -432,7 +445,7 @@ def _coil(pts: np.ndarray, normals: np.ndarray, radius: float, rng) -> np.ndarra
 
 def reach(params: HairParams) -> float:
     """Metres the longest strand (hair or beard) of these parameters can run from its root."""
-    return max(max(STYLES[params.style][:5]) * params.length, BEARDS[params.beard])
+    return max(max(STYLES[params.style].lengths) * params.length, BEARDS[params.beard])
 
 
 def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> Strands:
@@ -440,8 +453,8 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     rest body's ``collide.Surface``) no strand point but its root lies inside the body, and
     with ``ears`` (2, 3) keypoints none passes through an ear."""
     rng = np.random.default_rng(params.seed)
-    table = STYLES[params.style]
-    gravity, volume = table[5], table[6]
+    style = STYLES[params.style]
+    gravity, volume = style.gravity, style.volume
     parting, clump = PARTING[params.style]
     part_x = {"side": float(rng.choice([-0.4, 0.4])), "centre": 0.0}.get(parting, 0.0)
     look = (gravity, volume, params.curliness, clump, 0.3 + params.curliness, parting, part_x)
@@ -453,7 +466,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     n_total = int(STRANDS[0] + (STRANDS[1] - STRANDS[0]) * params.density)
     top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
     for r_idx in range(5):
-        L = table[r_idx] * params.length
+        L = style.lengths[r_idx] * params.length
         mask = face_region == r_idx
         if L <= 0 or not mask.any():
             continue
