@@ -16,12 +16,13 @@ from conftest import TINY, generate_tiny as _generate
 
 
 def _files(root) -> dict:
-    """Every file's bytes by relative path, but the run log (timings and host names)."""
+    """Every file's bytes by relative path, but the run log (timings and host names) and what
+    `synmitsuba stats` adds to the shared tiny dataset in another test."""
     out = {}
     for folder, _, files in os.walk(root):
         for f in files:
             path = os.path.join(folder, f)
-            if f != "run.log":
+            if f not in ("run.log", "stats.json", "stats.png"):
                 out[os.path.relpath(path, root)] = open(path, "rb").read()
     return out
 
