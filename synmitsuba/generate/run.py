@@ -144,7 +144,7 @@ def check_output(out: str) -> str:
 
 
 def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str = "local", ray_address: str | None = None,
-             max_failures: int = 2, progress: bool = True, task: Callable = None) -> Summary:
+             max_failures: int = 2, progress: bool = True, task: Callable | None = None) -> Summary:
     """Render every sequence of ``config`` not yet in ``out``'s manifest; retry a failing one up to
     ``max_failures`` times, then report it (never dropped silently). Every failure's traceback
     goes to ``run.log``; ``Summary.failed`` keeps its one-line summary. ``executor`` names one
