@@ -140,7 +140,7 @@ def _quick_task(config, index, out):
     if index == 4:
         os._exit(3)
     name = f"seq_{index:06d}"
-    os.makedirs(os.path.join(out, name))
+    os.makedirs(os.path.join(out, name), exist_ok=True)  # a rerun after a broken pool may find it (as run_sequence does)
     return {"sequence": index, "folder": name, "samples": [], "frames": 1, "views": 1, "seconds": 0.3,
             "pid": os.getpid(), "peak_rss_mb": 0.0, "rss_mb": 0.0}
 
