@@ -105,6 +105,8 @@ def test_subject_records_survive_the_sample_files(sm, walker, tmp_path):
     assert np.array_equal(a["body_params_cam"]["rotations"], b["body_params_cam"]["rotations"])
     side = json.loads((tmp_path / "s.json").read_text())
     assert side["subjects"][0]["instance"] == 100 and "amodal_mask" not in side["subjects"][0]
+    assert side["keypoint_names"][15:18] == ["left_ankle", "right_ankle", "left_big_toe"]
+    assert len(side["keypoint_names"]) == len(side["subjects"][0]["keypoints2d"])
 
 
 def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path):
@@ -151,6 +153,8 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
     assert hd["anny.rotations"].shape[1:] == (len(walker.human.skeleton), 3)
     assert np.allclose(root_cam, walker.human.skeleton.rest_positions[0] + hd["anny.root_translation"])
     assert list(hd["instance"]) == [100, 101, 100, 101] and hd["image_path"][0].endswith("view0.png")
+    assert list(hd["keypoint_names"][17:20]) == ["left_big_toe", "left_small_toe", "left_heel"]
+    assert gt.dataset["categories"][0]["foot_keypoints"][3] == "right_big_toe"
 
 
 def test_layered_body_passes_against_the_visible_surface(sm, walker):

@@ -916,6 +916,18 @@ def test_keypoints_are_anatomical(human):
     assert 0 <= k["left_heel"][1] < 0.12
 
 
+def test_foot_points_come_in_the_documented_order(human):
+    """Rows 17-22 are left big toe, left small toe, left heel, then the right ones (FORMAT.md,
+    COCO-WholeBody), checked on the rest pose's geometry, not on the labels."""
+    foot = human.keypoints()[17:]
+    assert list(np.sign(foot[:, 0])) == [1, 1, 1, -1, -1, -1]  # the subject's left is +x
+    for big, small, heel in (foot[:3], foot[3:]):
+        assert min(big[2], small[2]) > heel[2] + 0.08  # toes ahead (+z) of the heel
+        assert abs(small[0]) > abs(big[0]) + 0.02  # the small toe on the outside
+    assert human.body.keypoint_labels[17:] == ("left_big_toe", "left_small_toe", "left_heel",
+                                               "right_big_toe", "right_small_toe", "right_heel")
+
+
 def test_subject_renders_with_instance_and_layer_ids(human):
     scene = sm.Scene()
     human.add_to(scene, instance=7)

@@ -116,12 +116,21 @@ def _static() -> dict:
     W /= W.sum(1, keepdims=True)
     with torch.no_grad():
         reg = KeypointsRegressor.coco(m)
-    labels = list(reg.labels) if hasattr(reg, "labels") else list(KEYPOINTS)
+    weights = _in_keypoint_order(reg.regression_weights.cpu().numpy().astype(np.float64), list(reg.labels))
     return {"faces": m.faces.cpu().numpy().astype(np.int64), "weights": W,
             "uv": m.texture_coordinates.cpu().numpy().astype(np.float64),
             "face_uv": m.face_texture_coordinate_indices.cpu().numpy().astype(np.int64),
             "parents": np.array(m.bone_parents), "bones": tuple(m.bone_labels),
-            "keypoint_weights": reg.regression_weights.cpu().numpy().astype(np.float64), "keypoint_labels": labels}
+            "keypoint_weights": weights, "keypoint_labels": list(KEYPOINTS)}
+
+
+def _in_keypoint_order(weights: np.ndarray, labels: list[str]) -> np.ndarray:
+    """The regressor's rows in ``KEYPOINTS`` order (anny lists the foot points as left big toe,
+    right big toe, left small toe, ...; our files use COCO-WholeBody's left-then-right order)."""
+    missing = [k for k in KEYPOINTS if k not in labels]
+    if missing:
+        raise RuntimeError(f"anny's keypoint regressor lacks {missing}: this anny version is not supported")
+    return weights[[labels.index(k) for k in KEYPOINTS]]
 
 
 @dataclass

@@ -14,13 +14,13 @@ import os
 
 import numpy as np
 
+from synmitsuba.body.anny_model import KEYPOINTS
 from synmitsuba.io.listing import list_samples
 from synmitsuba.io.exr import read_sample
 from synmitsuba.io.files import atomic_path
 
-COCO_KEYPOINTS = ["nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder",
-                  "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee",
-                  "right_knee", "left_ankle", "right_ankle"]
+COCO_KEYPOINTS = list(KEYPOINTS[:17])
+FOOT_KEYPOINTS = list(KEYPOINTS[17:])  # COCO-WholeBody's foot order: left big toe, small toe, heel, then right
 COCO_SKELETON = [[16, 14], [14, 12], [17, 15], [15, 13], [12, 13], [6, 12], [7, 13], [6, 7], [6, 8], [7, 9], [8, 10],
                  [9, 11], [2, 3], [1, 2], [1, 3], [2, 4], [3, 5], [4, 6], [5, 7]]
 
@@ -71,7 +71,7 @@ def export_coco(dataset_dir: str, out_json: str) -> dict:
                 anns.append(ann)
     doc = {"info": {"description": "synmitsuba export", "version": "1"}, "images": images, "annotations": anns,
            "categories": [{"id": 1, "name": "person", "supercategory": "person", "keypoints": COCO_KEYPOINTS,
-                           "skeleton": COCO_SKELETON}]}
+                           "foot_keypoints": FOOT_KEYPOINTS, "skeleton": COCO_SKELETON}]}
     with atomic_path(out_json) as tmp, open(tmp, "w") as fh:
         json.dump(doc, fh)
     return {"images": len(images), "annotations": len(anns)}
@@ -146,8 +146,8 @@ def export_humandata(dataset_dir: str, out_npz: str) -> dict:
     arrays = {k: np.asarray(v) for k, v in cols.items()}
     for kind in ("smplx", "smpl"):
         arrays.update(_body_model_columns(rows, kind))
-    n_kp = 23
-    arrays["keypoints2d_mask"] = arrays["keypoints3d_mask"] = np.ones(n_kp, np.uint8)
+    arrays["keypoints2d_mask"] = arrays["keypoints3d_mask"] = np.ones(len(KEYPOINTS), np.uint8)
+    arrays["keypoint_names"] = np.array(KEYPOINTS)
     with atomic_path(out_npz) as tmp:
         with open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)

@@ -15,6 +15,7 @@ import sys
 
 import numpy as np
 
+from synmitsuba.body.anny_model import KEYPOINTS
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.files import atomic_path
 from synmitsuba.io.preview import to_srgb8, write_png
@@ -85,10 +86,13 @@ def _passes(ch: dict) -> dict[str, np.ndarray]:
 
 
 def _sidecar(sample: Sample) -> dict:
-    return {"format": "synmitsuba-sample", "format_version": FORMAT_VERSION,
+    side = {"format": "synmitsuba-sample", "format_version": FORMAT_VERSION,
             "camera": sample.camera.to_dict(), "instances": sample.instance_ids(),
             "width": sample.camera.width, "height": sample.camera.height, "meta": sample.meta,
             "subjects": [_plain({k: v for k, v in r.items() if k != "amodal_mask"}) for r in sample.subjects]}
+    if sample.subjects:  # what each row of the keypoint arrays is
+        side["keypoint_names"] = list(KEYPOINTS)
+    return side
 
 
 def _use_threads(OpenEXR) -> None:
