@@ -91,6 +91,17 @@ def test_amodal_mask_boxes_and_projection(sm, walker):
                                                                     rec["bbox_keypoints"][3] - rec["bbox_keypoints"][1]) / 200)
 
 
+def test_records_refuse_a_subject_id_an_object_shares(sm, walker):
+    from synmitsuba.annotate import Annotator
+    from synmitsuba.errors import ConfigError
+    scene = _scene(sm, walker)
+    cam = sm.Camera.look_at(eye=(0.0, 1.0, 4.0), target=(0, 0.9, 0), width=16, height=16)
+    crate = np.array([[-0.3, 0, 1], [0.3, 0, 1], [0.3, 0.5, 1], [-0.3, 0.5, 1]])
+    scene.add_mesh("crate", crate, np.array([[0, 1, 2], [0, 2, 3]]), instance=walker.instance)
+    with pytest.raises(ConfigError, match=r"^subject0.instance = 100: the shape 'crate' has this id too"):
+        Annotator([walker]).annotate(sm.render(scene, cam, spp=1), scene, 3)
+
+
 def test_subject_records_survive_the_sample_files(sm, walker, tmp_path):
     from synmitsuba.annotate import Annotator
     scene = _scene(sm, walker)

@@ -164,6 +164,19 @@ def test_scene_file_errors_name_the_full_path_before_building(sm, tmp_path, monk
         assert str(e.value).startswith(field + " = "), (field, str(e.value))
 
 
+def test_scene_file_subject_ids_never_meet_object_ids(sm, tmp_path, monkeypatch):
+    import synmitsuba.compose.subjects as subjects
+    from synmitsuba.compose.scenefile import read_scene_doc
+    (tmp_path / "p.yaml").write_text(PEOPLE.replace("instance: 0, layer", "instance: 100, layer"))
+    doc = read_scene_doc(tmp_path / "p.yaml")
+    assert subjects.subject_instances(doc.subjects, set(doc.object_instances())) == [200]
+    monkeypatch.setattr(subjects, "build_subject", lambda r: pytest.fail("built a subject before checking"))
+    (tmp_path / "p.yaml").write_text(PEOPLE.replace("instance: 0, layer", "instance: 7, layer")
+                                     .replace("{position", "{instance: 7, position"))
+    with pytest.raises(ConfigError, match=r"^subjects\[0\]\.instance = 7: another subject or an object"):
+        sm.load_scene_file(tmp_path / "p.yaml")
+
+
 def test_sequence_index_is_reproducible_and_moves_everything_in_place(sm, tmp_path):
     from synmitsuba.engine.build import STATS
     (tmp_path / "p.yaml").write_text(PEOPLE)

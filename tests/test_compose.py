@@ -353,3 +353,27 @@ def test_motions_from_a_bvh_folder(sm, tmp_path):
     (folder / "take1.bvh").unlink()
     with pytest.raises(ConfigError, match=r"subjects\.motions\[0\] = 'mocap': the folder holds no"):
         sm.compose_scene(cfg, np.random.default_rng(0))
+
+
+def test_instance_ids_stay_unique_with_more_than_100_objects(sm, tmp_path):
+    """120 objects take ids 2..121: the subject moves to 200 (was 100, object 98's id), read off
+    the shapes' names, and its records count only its own pixels."""
+    ring = [[5.5 * np.cos(a), 5.5 * np.sin(a)] for a in np.linspace(0, 2 * np.pi, 120, endpoint=False)]
+    env = {"name": "crates", "area": [-6, -6, 6, 6], "objects": [
+        {"kind": "box", "position": [float(x), float(z)], "size": [0.2, 1.5, 0.2]} for x, z in ring]}
+    (tmp_path / "crates.yaml").write_text(json.dumps(env))
+    cfg = {**SMALL, "environments": [str(tmp_path / "crates.yaml")], "subjects": {**SMALL["subjects"], "count": 1},
+           "cameras": {"mode": "ring", "count": 2, "ring_distance": 3.0, "width": 48, "height": 64, "points": 32}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(1))
+    scene, _ = spec.build()
+    ids: dict = {}
+    for name, shape in (*scene.meshes.items(), *scene.curves.items()):
+        owner = name.split("_")[0]  # object<i>_<kind>_<part>, subject<i>_<layer>, ground
+        ids.setdefault(owner, set()).add(shape.instance)
+    assert all(len(v) == 1 for v in ids.values()) and len(ids) == 122
+    owners = {next(iter(v)): k for k, v in ids.items()}
+    assert len(owners) == 122 and owners[200] == "subject0" and owners[100] == "object98"
+    for _, _, sample in sm.render_sequence(spec, frames=[0], spp=1):
+        rec = sample.subjects[0]
+        assert rec["instance"] == 200 and (sample.instance == 200).sum() > 0
+        assert ((sample.instance == 200) <= rec["amodal_mask"]).all() and rec["visible_fraction"] <= 1

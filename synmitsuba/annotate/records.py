@@ -123,6 +123,12 @@ class Annotator:
                 raise ConfigError("scene", f"{p.prefix}_body " + ("missing" if mesh is None else "at another pose"),
                                   f"pose every subject in the scene at frame {frame} first "
                                   "(PlacedSubject.pose_in(scene, frame)): its labels are cast there")
+        for p in self.subjects:  # its pixels, masks and keypoint visibility are counted by id
+            other = next((name for name, s in (*scene.meshes.items(), *scene.curves.items())
+                          if s.instance == p.instance and not name.startswith(f"{p.prefix}_")), None)
+            if other is not None:
+                raise ConfigError(f"{p.prefix}.instance", p.instance, f"the shape {other!r} has this id too; give "
+                                  "every subject an id no object or other subject has")
 
     def _amodal(self, i: int, instance: int, cam: Camera, rays: np.ndarray, scene: Scene) -> np.ndarray:
         """The subject alone through pixel-centre rays, cast only inside the image box its

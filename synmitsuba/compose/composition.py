@@ -12,6 +12,7 @@ import numpy as np
 from synmitsuba.body.recipe import SubjectConfig, sample_subject
 from synmitsuba.compose import cameras as cams
 from synmitsuba.compose.environments import environment_names, load_environment, object_boxes, sample_lighting
+from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import in_view, occlusion, surface_samples
 from synmitsuba.compose.placement import PlacementConfig, frame_hulls, place_subjects
 from synmitsuba.compose.spec import SceneSpec, SubjectSpec, ViewSpec, clip_motion, resolve_environment
@@ -137,7 +138,8 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
                                 "base": cfg.base}, hulls, height, human, lift))
     boxes = object_boxes(env)
     placements = place_subjects([d[2] for d in drafts], env.area, boxes[:, [0, 2, 3, 5]], cfg.placement, rng)
-    subjects = [SubjectSpec(d[0], d[1], p.position, p.yaw_deg, 100 + i, p.footprint, p.frames, d[3], d[5])
+    first = first_subject_instance(OBJECT_INSTANCE + len(env.objects) - 1)
+    subjects = [SubjectSpec(d[0], d[1], p.position, p.yaw_deg, first + i, p.footprint, p.frames, d[3], d[5])
                 for i, (d, p) in enumerate(zip(drafts, placements))]
     n_frames = len(placements[0].frames)
     spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, subjects, [], n_frames, sc.fps, [], seed,

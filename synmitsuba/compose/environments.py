@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from synmitsuba.compose.instances import GROUND_INSTANCE, OBJECT_INSTANCE
 from synmitsuba.errors import ConfigError
 from synmitsuba.resources import asset_path
 from synmitsuba.schema import Choice, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
@@ -23,8 +24,6 @@ from synmitsuba.scene.materials import EnvMap, Material, SunSky
 SCENES_DIR = asset_path("scenes")  # package data: works from a wheel as from a checkout
 ENV_DIR = os.path.join(SCENES_DIR, "environments")
 GROUND_HALF_SIZE = 20000.0  # metres: the ground's edge lies < 0.01 degrees below the horizon from 3 m up
-GROUND_INSTANCE = 1
-OBJECT_INSTANCE = 2  # objects get 2, 3, ...; subjects start at 100
 
 
 # -- objects ------------------------------------------------------------------------------

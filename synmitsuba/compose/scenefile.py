@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects
+from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects, subject_instances
 from synmitsuba.errors import ConfigError
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
@@ -114,6 +114,13 @@ class SceneDoc(Params):
     cameras: list = spec(check=ListOf(Nested(CameraSpec), 1), doc="at least one camera")
     subjects: list = spec(factory=list, check=ListOf(Nested(SubjectEntry)))
 
+    def __post_init__(self):
+        subject_instances(self.subjects, set(self.object_instances()))  # ids clash: fail before building
+
+    def object_instances(self) -> list[int]:
+        """Each object's id: its own or its index + 1."""
+        return [i + 1 if o.instance is None else int(o.instance) for i, o in enumerate(self.objects)]
+
 
 @dataclass
 class SceneFile:
@@ -163,14 +170,14 @@ def _mesh(obj: ObjectSpec, where: str, base: str):
     raise ConfigError(where, obj.name, "give either 'primitive' or 'mesh'")
 
 
-def _add_object(scene: Scene, obj: ObjectSpec, i: int, materials: dict, base: str) -> None:
+def _add_object(scene: Scene, obj: ObjectSpec, i: int, instance: int, materials: dict, base: str) -> None:
     where = f"objects[{i}]"
     mesh = _mesh(obj, where, base)
     mesh.apply_transform(_transform(obj))
     scene.add_mesh(obj.name or f"object_{i}", mesh.vertices, mesh.faces, uv=getattr(mesh.visual, "uv", None),
                    normals=mesh.vertex_normals if obj.smooth else None,
                    material=_material(obj.material, materials, f"{where}.material"),
-                   instance=i + 1 if obj.instance is None else obj.instance, layer=obj.layer)
+                   instance=instance, layer=obj.layer)
 
 
 def _typed(classes: dict, data: dict, where: str, base: str):
@@ -214,8 +221,8 @@ def scene_from_doc(doc: SceneDoc, path: str, seed: int | None = None, subjects: 
     base = os.path.dirname(os.path.abspath(path))
     materials = {name: _material(m, {}, f"materials.{name}") for name, m in doc.materials.items()}
     scene = Scene()
-    for i, obj in enumerate(doc.objects):
-        _add_object(scene, obj, i, materials, base)
+    for i, (obj, instance) in enumerate(zip(doc.objects, doc.object_instances())):
+        _add_object(scene, obj, i, instance, materials, base)
     if doc.environment is not None:
         env = _typed(ENVIRONMENTS, doc.environment, "environment", base)
         scene.set_environment(env)

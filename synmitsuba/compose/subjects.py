@@ -11,6 +11,7 @@ import numpy as np
 
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
 from synmitsuba.body.subject import LayeredHuman, build_subject
+from synmitsuba.compose.instances import first_subject_instance, scene_instances
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.motion import Motion
 from synmitsuba.motion.retargeting import retarget
@@ -68,6 +69,7 @@ def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str
     parsed = [e if isinstance(e, SubjectEntry) else SubjectEntry.from_dict(e, f"{where}[{i}]") for i, e in enumerate(entries)]
     for i, e in enumerate(parsed):
         e.check_files(f"{where}[{i}]", base)
+    ids = subject_instances(parsed, scene_instances(scene), where)
     placed = []
     for i, e in enumerate(parsed):
         pick = i if e.seed is None else e.seed
@@ -81,7 +83,19 @@ def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str
         motion = load_motion(e.motion, rng, seconds=2.0, base=base, field=f"{where}[{i}].motion")
         motion = place_motion(retarget(motion, human.skeleton), e.position, e.yaw_deg)
         frame = (motion.n_frames // 2 if e.frame is None else e.frame) % motion.n_frames
-        subject = PlacedSubject(human, motion, frame, 100 + i if e.instance is None else e.instance, f"subject{i}")
+        subject = PlacedSubject(human, motion, frame, ids[i], f"subject{i}")
         subject.pose_in(scene)
         placed.append(subject)
     return placed
+
+
+def subject_instances(entries: list, taken: set[int], where: str = "subjects") -> list[int]:
+    """Each entry's id: its own, or ``first_subject_instance`` (100 above ids up to 99 in
+    ``taken``) + its index. An id another subject or an object has is an error."""
+    first = first_subject_instance(max(taken, default=0))
+    ids = [first + i if e.instance is None else int(e.instance) for i, e in enumerate(entries)]
+    for i, e in enumerate(entries):
+        if ids[i] in taken or ids[i] in ids[:i]:
+            raise ConfigError(f"{where}[{i}].instance", ids[i], "another subject or an object has this id; give "
+                              "each subject its own (default ids: 100 + index)")
+    return ids
