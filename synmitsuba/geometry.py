@@ -101,6 +101,27 @@ def bounds(points) -> tuple[np.ndarray, np.ndarray]:
 
 
 # -- meshes ------------------------------------------------------------------------------
+def ground_grid(half_size: float, cell: float = 10.0, near: float = 100.0) -> tuple[np.ndarray, np.ndarray]:
+    """A square ground at y = 0 (vertices (V, 3), faces (F, 3) facing +y) out to ``half_size``:
+    ``cell``-metre squares within ``near`` of the origin, then squares doubling in size. A point
+    interpolated on a triangle in float32 (Mitsuba's uv, texture lookups) is off by about the
+    triangle's size times 1e-7: 2-6 mm on one 40 km triangle, under 2 um on 10 m cells."""
+    ring, step = list(np.arange(0.0, min(near, half_size), cell)), cell
+    edge = ring[-1]
+    while edge < half_size:
+        step = step * 2 if edge >= near else step
+        edge = min(edge + step, half_size)
+        ring.append(edge)
+    xs = np.concatenate([-np.array(ring[:0:-1]), ring])
+    n = len(xs)
+    gx, gz = np.meshgrid(xs, xs, indexing="ij")
+    vertices = np.stack([gx.ravel(), np.zeros(n * n), gz.ravel()], 1)
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    a, b, c, d = (i * n + j).ravel(), ((i + 1) * n + j).ravel(), ((i + 1) * n + j + 1).ravel(), (i * n + j + 1).ravel()
+    faces = np.concatenate([np.stack([a, d, c], 1), np.stack([a, c, b], 1)])
+    return vertices, faces
+
+
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals (trimesh's mean of the unnormalised face normals)."""
     import trimesh

@@ -115,3 +115,29 @@ def test_render_sequence_writes_flow_with_hair(sm, tmp_path):
     assert np.array_equal(scene.curves["s0_hair"].points, human.pose(*clip.frame(4))[-1].points)
     with pytest.raises(ConfigError, match=r"frame = 9: the clip has frames 0\.\.8: there is no flow"):
         subjects_geometry([p], clip.n_frames)
+
+
+def test_composed_ground_is_exact_near_the_scene_and_still_where_nothing_moves(sm):
+    """The plaza's ground (40 km across) against the plane y = 0 intersected in float64: the
+    position pass within 0.1 mm and uv within 1e-4 tiles up to 10 m; the flow of still ground
+    and objects under a still camera, with one shape moving, within 0.01 px (it was 0.17 px,
+    and the position 6.3 mm off, on one triangle pair)."""
+    from synmitsuba.compose.environments import add_environment, load_environment, sample_lighting
+    env, rng = load_environment("plaza"), np.random.default_rng(0)
+    scene = sm.Scene()
+    add_environment(scene, env, sample_lighting(env, rng), rng)
+    scene.add_mesh("mover", PLANE * 0.2 + [0, 1, 2], QUAD, instance=100)
+    cam = sm.Camera.look_at(eye=(0.3, 1.6, 6.0), target=(0.1, 0.0, 0.0), fov_y_deg=60, width=96, height=72)
+    s = sm.render(scene, cam, spp=1)
+    d = cam.pixel_rays()
+    t = -cam.center[1] / d[..., 1]  # float64 ray-plane intersection
+    exact = cam.center + np.where(t > 0, t, np.nan)[..., None] * d
+    near = (s.instance == 1) & (t < 10)
+    assert near.sum() > 2000
+    assert np.abs(s.passes["position"][near] - exact[near]).max() < 1e-4
+    assert np.abs(s.passes["uv"][near] - exact[near][:, [0, 2]] / env.ground.tile_m).max() < 1e-4
+    now, then = Geometry({"mover": scene.meshes["mover"].vertices}), Geometry({"mover": PLANE * 0.2 + [0.1, 1, 2]})
+    flow, flags = exact_flow(scene, cam, cam, now, then)
+    still = (s.instance > 0) & (s.instance < 100) & (flags == SEEN)
+    assert still.sum() > 3000 and np.abs(flow[still]).max() < 0.01
+    assert np.abs(flow[s.instance == 100, 0] - cam.K[0, 0] * 0.1 / 4.0).max() < 0.2  # the mover's flow, roughly

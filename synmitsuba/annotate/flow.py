@@ -1,10 +1,10 @@
 """Exact optical flow between two frames of a scene.
 
-Each pixel-centre ray of frame f hits a surface point: a triangle and its barycentric
-coordinates (meshes), or a curve segment, the share along it and the offset from its axis
-(hair). That same material point is taken to frame g (the triangle's vertices at g; the
-segment's control points at g, plus the offset) and projected with g's camera: flow = its
-pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at g, 1 hidden at g
+Each pixel-centre ray of frame f hits a surface point (eye + t * ray): on a triangle at its
+barycentric coordinates (meshes), or on a curve segment, a share along it and an offset from
+its axis (hair). That same material point is taken to frame g (moved by its triangle's
+corners or its segment's control points from f to g; unmoved shapes keep it exactly) and
+projected with g's camera: flow = its pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at g, 1 hidden at g
 (the ray from g's eye meets another surface first), 2 outside g's image or behind its camera,
 3 nothing hit at f (background: flow 0).
 """
@@ -40,13 +40,18 @@ def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Ge
         if idx < 0:
             continue
         name = hits["names"][idx]
-        if name in scene.meshes:
-            V = then.vertices.get(name, scene.meshes[name].vertices)
-            tri = V[scene.meshes[name].faces[hits["prim"][sel]].astype(np.int64)]
-            u, v = hits["u"][sel, None], hits["v"][sel, None]
-            out[sel] = (1 - u - v) * tri[:, 0] + u * tri[:, 1] + v * tri[:, 2]
+        p = rays_o + hits["t"][sel, None] * rays_d[sel]  # exact on any triangle (still ground: flow 0)
+        if name in scene.meshes:  # moved by its triangle's motion (barycentrics u, v of corners 1, 2)
+            if name in then.vertices:
+                faces = scene.meshes[name].faces[hits["prim"][sel]].astype(np.int64)
+                u, v = hits["u"][sel, None], hits["v"][sel, None]
+
+                def at(V):
+                    tri = V[faces]
+                    return (1 - u - v) * tri[:, 0] + u * tri[:, 1] + v * tri[:, 2]
+                p = p + (at(then.vertices[name]) - at(now.vertices.get(name, scene.meshes[name].vertices)))
+            out[sel] = p
         else:  # a curve: segment prim of strand prim // (K - 1), u along it; p lies a radius off its axis
-            p = rays_o + hits["t"][sel, None] * rays_d[sel]
             if name in then.curves:
                 P0 = now.curves.get(name, scene.curves[name].points)
                 k = P0.shape[1] - 1

@@ -16,6 +16,7 @@ import numpy as np
 
 from synmitsuba.compose.instances import GROUND_INSTANCE, OBJECT_INSTANCE
 from synmitsuba.errors import ConfigError
+from synmitsuba.geometry import ground_grid
 from synmitsuba.resources import asset_path
 from synmitsuba.schema import Choice, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
 from synmitsuba.scene.layers import Layer
@@ -203,12 +204,11 @@ def ground_texture(ground: Ground, rng: np.random.Generator, n: int = 256) -> np
 
 
 def add_ground(scene, ground: Ground, rng: np.random.Generator) -> None:
-    s = GROUND_HALF_SIZE
-    v = np.array([[-s, 0, -s], [s, 0, -s], [s, 0, s], [-s, 0, s]], float)
+    v, faces = ground_grid(GROUND_HALF_SIZE)
     uv = v[:, [0, 2]] / ground.tile_m
     mat = Material(texture=ground_texture(ground, rng), kind="principled", roughness=ground.roughness, specular=0.3,
                    name="ground")
-    scene.add_mesh("ground", v, np.array([[0, 2, 1], [0, 3, 2]]), uv=uv, normals=np.tile([0, 1.0, 0], (4, 1)),
+    scene.add_mesh("ground", v, faces, uv=uv, normals=np.tile([0, 1.0, 0], (len(v), 1)),
                    material=mat, instance=GROUND_INSTANCE, layer=int(Layer.GROUND))
 
 

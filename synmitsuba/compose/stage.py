@@ -1,8 +1,8 @@
 """A plain stage for previews: a large grey ground at y = 0 under a sun and sky."""
 from __future__ import annotations
 
-import numpy as np
 
+from synmitsuba.geometry import ground_grid
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.materials import Material, SunSky
 from synmitsuba.scene.scene import Scene
@@ -14,9 +14,7 @@ def preview_stage(sun_direction=(0.5, 0.9, 0.7), ground: float = 0.45, sky_scale
     0.01 degrees of the horizon from a standing eye, so no black band shows there) and a sun and
     sky."""
     scene = Scene()
-    s = half_size
-    quad = np.array([[-s, 0, -s], [s, 0, -s], [s, 0, s], [-s, 0, s]], float)
-    scene.add_mesh("ground", quad, np.array([[0, 2, 1], [0, 3, 2]]), material=Material(base_color=ground),
+    scene.add_mesh("ground", *ground_grid(half_size), material=Material(base_color=ground),
                    layer=Layer.GROUND)
     scene.set_environment(SunSky(sun_direction=sun_direction, sky_scale=sky_scale))
     return scene

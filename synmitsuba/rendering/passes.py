@@ -184,8 +184,13 @@ def _normal(h: Hit):
 
 @exact_pass("position")
 def _position(h: Hit):
+    """The eye + t * the ray, as depth is: Mitsuba's ``si.p`` interpolates the triangle's corners
+    with float32 barycentrics, millimetres off on a triangle kilometres across."""
     import drjit as dr
-    return dr.select(h.hit, h.si.p, 0.0)
+    import mitsuba as mi
+    eye = mi.Point3f(*h.camera.center.tolist())
+    dr.make_opaque(eye)
+    return dr.select(h.hit, eye + h.si.t * h.d, 0.0)
 
 
 @exact_pass("uv_valid")
