@@ -11,7 +11,6 @@ import numpy as np
 
 from synmitsuba.body.segments import vertex_parts
 from synmitsuba.engine.raycast import far_side, hits_through
-from synmitsuba.geometry import vertex_normals
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.scene import Scene
@@ -29,12 +28,12 @@ class BodyLayer:
         self.face_parts = [vertex_parts(p.human.parts[0].weights, p.human.skeleton.names)[f[:, 0]] + 1
                            for p, f in zip(subjects, self.faces)]
         self.bodies: list = []
-        self.normals: list = []
+        self.normals: list = []  # welded across the uv seams, as the rendered normals are
 
     def pose(self, bodies: list) -> None:
         """The bodies' posed vertices (one (V, 3) array per subject)."""
         self.bodies = bodies
-        self.normals = [vertex_normals(v, f) for v, f in zip(bodies, self.faces)]
+        self.normals = [p.human.smooth_normals("body")(v) for p, v in zip(self.subjects, bodies)]
 
     def passes(self, cam: Camera, scene: Scene, instance: np.ndarray, depth: np.ndarray, layer: np.ndarray) -> dict:
         """The body passes of one view (H, W arrays; see the module docstring), from rays cast

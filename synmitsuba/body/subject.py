@@ -306,17 +306,17 @@ class LayeredHuman:
                                      layer=layer.layer)
             elif name in scene.meshes:  # a copy held for visibility tests (flow) has no normals to move
                 shaded = scene.meshes[name].normals is not None
-                scene.update_mesh(name, layer.vertices, self._normals(layer.name)(layer.vertices) if shaded else None)
+                scene.update_mesh(name, layer.vertices, self.smooth_normals(layer.name)(layer.vertices) if shaded else None)
             else:
                 scene.add_mesh(name, layer.vertices, layer.faces, uv=layer.uv,
-                               normals=self._normals(layer.name)(layer.vertices), material=layer.material,
+                               normals=self.smooth_normals(layer.name)(layer.vertices), material=layer.material,
                                instance=instance, layer=layer.layer)
         return scene
 
-    def _normals(self, part: str) -> SmoothNormals:
+    def smooth_normals(self, part: str) -> SmoothNormals:
         """A part's ``SmoothNormals`` over ``topology.weld`` of its rest vertices (the body and
-        garments are split along their uv seams), made once: the rendered normals are smooth
-        across the seams. Without normals Mitsuba shades every triangle flat, and anny's 2-4 cm
+        garments are split along their uv seams), made once: the rendered normals (and the
+        ``body_normal`` label) are smooth across the seams. Without normals Mitsuba shades every triangle flat, and anny's 2-4 cm
         triangles showed in a close-up."""
         made = self.__dict__.setdefault("_smooth_normals", {})
         if part not in made:
