@@ -95,7 +95,7 @@ def render_sequence_index(config: SequenceConfig | dict, index: int, out: str | 
 
 
 def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, annotate: bool = True,
-                    body_models: SMPLXOptions | None = None, **render_args):
+                    body_models: SMPLXOptions | None = None, flow: str | int = "rendered", **render_args):
     """Yield ``(frame, view name, Sample)`` for every frame (default all) and view (default
     all) of a composed scene, frame by frame; subjects move in place (vertices and hair
     curves), so no frame after the first reloads the Mitsuba scene. The sample of frame f
@@ -104,7 +104,9 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
     its ``subjects`` hold each subject's labels (``synmitsuba.annotate``: keypoints and their
     visibility, amodal mask, boxes, body parameters in world and camera frames; with
     ``body_models`` enabled, SMPL-X (and SMPL) parameters fitted to each subject over these
-    frames before the first is rendered)."""
+    frames before the first is rendered) and exact flow: ``flow="rendered"`` to the previous
+    and next frame of ``frames`` (the samples flow pairs with), an int k to clip frames f - k
+    and f + k; the targets are in the meta's ``flow_frames``."""
     if not isinstance(spec, SceneSpec):
         raise ConfigError("spec", type(spec).__name__, "give a SceneSpec (sm.compose_scene or SceneSpec.from_json)")
     names = [v.name for v in spec.views] if views is None else [spec.view(n).name for n in views]
@@ -112,13 +114,14 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
     for f in frames:
         if isinstance(f, bool) or not isinstance(f, (int, np.integer)) or not 0 <= f < spec.n_frames:
             raise ConfigError("frames", f, f"give frame indices in [0, {spec.n_frames - 1}]")
+    targets = flow_targets(list(frames), spec.n_frames, flow)
     scene, placed = spec.build()
     if annotate and body_models is not None:
         for p in placed:
             p.fits = fit_subject(p.human, p.motion, [int(f) for f in frames], body_models)
     annotator = Annotator(placed) if annotate else None
     geometry, neighbours = _GeometryCache(placed), _Neighbours(scene, placed)
-    for f in frames:
+    for k, f in enumerate(frames):
         for p in placed:
             p.pose_in(scene, int(f))
         for name in names:
@@ -130,7 +133,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
                                          zip(spec.subjects, view.occlusion, view.in_view, view.valid)])
             if annotator is not None:
                 annotator.annotate(sample, scene, int(f), valid=view.valid)
-                _add_flow(sample, scene, placed, view, int(f), spec.n_frames, geometry, neighbours)
+                _add_flow(sample, scene, placed, view, int(f), targets[k], geometry, neighbours)
             yield int(f), name, sample
         settle_frame_memory()
 
@@ -151,9 +154,9 @@ class _GeometryCache:
 
 class _Neighbours:
     """Plain copies of the scene held at neighbouring frames for flow's visibility tests. Three
-    of them, each kept at its frame while it is still of use: frame f asks for f + 1 and
-    f - 1, and f - 1 is the copy moved to it for frame f - 1's forward flow, so one copy moves
-    a frame (two did with a copy for each side: each move is a BVH rebuilt, 30-70 ms with hair)."""
+    of them, each kept at its frame while it is still of use: frame f asks for the next and
+    previous ones, and the previous one is the copy moved to it for that frame's forward flow,
+    so one copy moves a frame (two did with a copy for each side: each move is a BVH rebuilt, 30-70 ms with hair)."""
 
     def __init__(self, scene, placed):
         self.placed, self.scene, self.copies, self.at = placed, scene, [], []
@@ -172,12 +175,26 @@ class _Neighbours:
         return self.copies[self.at.index(g)]
 
 
-def _add_flow(sample, scene, placed, view, f: int, n_frames: int, geometry, neighbours) -> None:
-    """Exact forward (to f + 1) and backward (to f - 1) flow where those frames exist, from one
-    cast of the view's pixel-centre rays."""
+def flow_targets(frames: list, n_frames: int, flow: str | int) -> list[dict]:
+    """Per rendered frame, the frames its flow goes to: ``{"fwd": g, "bwd": h}`` (a side left
+    out where there is none). ``"rendered"``: the next and previous entries of ``frames``; an
+    int k: clip frames f + k and f - k inside the clip."""
+    if flow == "rendered":
+        return [{**({"fwd": int(frames[i + 1])} if i + 1 < len(frames) else {}),
+                 **({"bwd": int(frames[i - 1])} if i > 0 else {})} for i in range(len(frames))]
+    if isinstance(flow, bool) or not isinstance(flow, (int, np.integer)) or flow < 1:
+        raise ConfigError("flow", flow, "give 'rendered' (to the neighbouring rendered frames) or a number of clip "
+                          "frames >= 1")
+    return [{side: int(f + s * flow) for side, s in (("fwd", 1), ("bwd", -1)) if 0 <= f + s * flow < n_frames}
+            for f in frames]
+
+
+def _add_flow(sample, scene, placed, view, f: int, targets: dict, geometry, neighbours) -> None:
+    """Exact forward and backward flow to ``targets`` (``flow_targets``), from one cast of the
+    view's pixel-centre rays; the targets go to the meta's ``flow_frames``."""
     hits = pixel_hits(scene, view.cameras[f])
-    for name, g in (("flow_fwd", f + 1), ("flow_bwd", f - 1)):
-        if 0 <= g < n_frames:
-            flow, flags = exact_flow(scene, view.cameras[f], view.cameras[g], geometry(f), geometry(g), neighbours(g, f),
-                                     hits)
-            sample.passes[name], sample.passes[f"{name}_flag"] = flow, flags
+    for side, g in targets.items():
+        flow, flags = exact_flow(scene, view.cameras[f], view.cameras[g], geometry(f), geometry(g), neighbours(g, f),
+                                 hits)
+        sample.passes[f"flow_{side}"], sample.passes[f"flow_{side}_flag"] = flow, flags
+    sample.meta["flow_frames"] = dict(targets)

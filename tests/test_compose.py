@@ -219,7 +219,7 @@ def test_labelled_frames_rebuild_two_bvhs_a_frame(sm, spec):
     for frame f - 1's forward flow. (Six a frame before: 1 + 2 subjects + 1 + 2 copies.)"""
     from synmitsuba.engine.build import STATS
     at = {}
-    for f, _, _ in sm.render_sequence(spec, frames=range(1, 6), spp=1, seed=2):
+    for f, _, _ in sm.render_sequence(spec, frames=range(1, 6), spp=1, seed=2, flow=1):  # frame 5 has flow to 6
         at.setdefault(f, STATS["updates"])
     assert len(spec.subjects) == 2 and len(spec.views) >= 2
     assert [at[f + 1] - at[f] for f in range(2, 5)] == [2, 2, 2]

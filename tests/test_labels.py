@@ -3,7 +3,7 @@ and soft coverage (alpha) for sample counts that are and are not perfect squares
 import numpy as np
 import pytest
 
-from synmitsuba.rendering.passes import strata
+from synmitsuba.engine.rays import strata
 
 W, H, F = 256, 24, 100.0
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from synmitsuba.body.segments import vertex_parts
 from synmitsuba.engine.raycast import far_side, hits_through
+from synmitsuba.engine.rays import pixel_centre_rays
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.scene import Scene
@@ -39,7 +40,7 @@ class BodyLayer:
         """The body passes of one view (H, W arrays; see the module docstring), from rays cast
         only where a subject shows, through anything not a body (``hits_through``)."""
         H, W = cam.height, cam.width
-        d = cam.pixel_rays().reshape(-1, 3)
+        d = pixel_centre_rays(cam).astype(np.float64)  # the instance pass's rays
         by_name = {f"{p.prefix}_body": k for k, p in enumerate(self.subjects)}
         shown = np.flatnonzero(np.isin(instance.reshape(-1), [p.instance for p in self.subjects]))
         far = max((far_side(b, cam.center) for b in self.bodies), default=0.0)

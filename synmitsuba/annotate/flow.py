@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.engine.raycast import cast, surface_hits
+from synmitsuba.engine.rays import pixel_centre_rays
 from synmitsuba.errors import ConfigError
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
@@ -67,7 +68,7 @@ def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Ge
 def pixel_hits(scene: Scene, cam: Camera) -> dict:
     """``surface_hits`` of ``cam``'s pixel-centre rays, with the rays (``"rays"``): what
     ``exact_flow`` starts from, shared by a view's forward and backward flow."""
-    d = cam.pixel_rays().reshape(-1, 3)
+    d = pixel_centre_rays(cam).astype(np.float64)  # the exact passes' rays: flags agree with the instance pass
     return {**surface_hits(scene, cam.center, d), "rays": d}
 
 

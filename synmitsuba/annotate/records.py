@@ -21,6 +21,7 @@ from synmitsuba.annotate.body import BodyLayer
 from synmitsuba.annotate.bodyparams import body_params_in_camera
 from synmitsuba.annotate.keypoints import keypoint_visibility
 from synmitsuba.engine.raycast import far_side, hits_through
+from synmitsuba.engine.rays import pixel_centre_rays
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import bounds, matrix_to_axis_angle
 from synmitsuba.scene.camera import Camera
@@ -96,16 +97,17 @@ class Annotator:
         valid when some pixel of the subject is visible and ``valid`` (one bool per subject,
         e.g. a view's validity from composition) allows it."""
         cam = sample.camera
-        rays = cam.pixel_rays().reshape(-1, 3)
+        rays = pixel_centre_rays(cam).astype(np.float64)  # the instance pass's own rays: visible within amodal
         instances = {p.instance for p in self.subjects}
         self._pose(int(frame))
         self._check_posed(scene, int(frame))
         records = []
         for i, p in enumerate(self.subjects):
             rot, root = p.motion.frame(int(frame) % p.motion.n_frames)
-            amodal = self._amodal(i, p.instance, cam, rays, scene)
-            rec = self._record(p, rot, root, cam, scene, instances, amodal, sample.passes["instance"] == p.instance,
-                               *self._posed[i])
+            visible = sample.passes["instance"] == p.instance
+            amodal = self._amodal(i, p.instance, cam, rays, scene) | visible  # the same rays: a no-op but for a
+            # ray the exact pass and this cast would see differently, which the shared rays rule out
+            rec = self._record(p, rot, root, cam, scene, instances, amodal, visible, *self._posed[i])
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
             rec["layer_pixels"] = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
             rec.update(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))

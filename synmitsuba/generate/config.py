@@ -31,6 +31,8 @@ class GenerateConfig(Params):
     frames: int | None = spec(None, optional(POSITIVE), doc="frames rendered per sequence (default: the whole clip)")
     stride: int = spec(1, POSITIVE, doc="clip frames between rendered frames")
     annotate: bool = spec(True, Flag(), doc="subject labels, flow and body passes")
+    flow: str = spec("rendered", Choice(("rendered", "adjacent")),
+                     doc="rendered: flow to the previous/next rendered frame (f -/+ stride); adjacent: to clip frames f -/+ 1")
     render: RenderOptions = spec(factory=RenderOptions, check=Nested(RenderOptions))
     compose: ComposeConfig = spec(factory=ComposeConfig, check=Nested(ComposeConfig))
     smplx: SMPLXOptions = spec(factory=SMPLXOptions, check=Nested(SMPLXOptions),

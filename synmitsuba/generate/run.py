@@ -51,7 +51,8 @@ def run_sequence(config: dict, index: int, out: str) -> dict:
     r = cfg.render
     try:
         for f, view, sample in render_sequence(spec, frames=frames, spp=r.spp, seed=render_seed,
-                                               annotate=cfg.annotate, body_models=cfg.smplx, max_depth=r.max_depth,
+                                               annotate=cfg.annotate, body_models=cfg.smplx,
+                                               flow="rendered" if cfg.flow == "rendered" else 1, max_depth=r.max_depth,
                                                sampler=r.sampler, denoise=r.denoise):
             sample.meta.update(sequence=index)
             stem = f"f{f:04d}_{view}"

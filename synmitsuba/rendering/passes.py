@@ -8,7 +8,6 @@ rays that hit geometry (``ray_intersect_preliminary``, about half the cost).
 from __future__ import annotations
 
 import functools
-import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -19,6 +18,7 @@ import numpy as np
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.rendering import sensor as sensor_mod
 from synmitsuba.engine.build import build
+from synmitsuba.engine.rays import camera_rays
 from synmitsuba.engine.settings import DENOISERS
 from synmitsuba.engine.settings import choose_sampler
 from synmitsuba.rendering.denoise import guides, oidn
@@ -84,46 +84,6 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
         warnings.warn(SynMitsubaWarning("the camera sees no geometry: every pixel is background; check the "
                                         "camera's position, target and field of view"), stacklevel=2)
     return Sample(camera=camera, passes={"rgb": rgb, **extra, **passes}, coverage=cov, meta=meta, timings=timings)
-
-
-def strata(n: int) -> tuple[int, int]:
-    """(rows, columns) of sub-pixel strata for ``n`` rays: rows x columns == n exactly, as
-    square as n allows (a prime n gives 1 x n strips), so the strata tile the whole pixel and
-    a jittered ray in each gives an unbiased coverage estimate for any n."""
-    rows = max(d for d in range(1, int(math.isqrt(n)) + 1) if n % d == 0)
-    return rows, n // rows
-
-
-def _camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None, pixels: np.ndarray | None = None):
-    """World rays built inside drjit: ``per_pixel`` rays per pixel, through the pixel centre
-    (``seed`` None) or one jittered ray in each of ``strata(per_pixel)`` strata (seeded PCG32),
-    for every pixel or for the flat indices ``pixels``. A pixel's rays do not depend on which
-    other pixels are cast. Returns (ray, unit directions)."""
-    import drjit as dr
-    import mitsuba as mi
-    H, W = camera.height, camera.width
-    n = H * W if pixels is None else len(pixels)
-    idx = dr.arange(mi.UInt32, n * per_pixel)
-    pixel, k = idx // per_pixel, idx % per_pixel
-    if pixels is not None:
-        pixel = dr.gather(mi.UInt32, mi.UInt32(np.asarray(pixels, np.uint32)), pixel)
-    x, y = mi.Float(pixel % W), mi.Float(pixel // W)
-    if seed is None:
-        ox = oy = mi.Float(0.5)
-    else:
-        rows, cols = strata(per_pixel)
-        # the seed is opaque: a new seed (every frame of a sequence) reuses the compiled kernel.
-        # PCG32 adds each lane's index to both inputs; taking it off again makes a ray's stream
-        # depend on its pixel and stratum alone, whichever pixels are cast
-        ray_id, lane = mi.UInt64(pixel * per_pixel + k), dr.arange(mi.UInt64, n * per_pixel)
-        rng = mi.PCG32(size=n * per_pixel, initstate=2 * ray_id - lane,
-                       initseq=dr.opaque(mi.UInt64, seed) + ray_id - lane)
-        ox = (mi.Float(k % cols) + rng.next_float32()) / cols
-        oy = (mi.Float(k // cols) + rng.next_float32()) / rows
-    M, o = mi.Matrix3f(camera.ray_matrix.tolist()), mi.Point3f(*[float(c) for c in camera.center])
-    dr.make_opaque(M, o)  # as values, not literals: another camera reuses the compiled kernels
-    d = dr.normalize(M @ mi.Vector3f(x + ox, y + oy, 1.0))
-    return mi.Ray3f(o, d), d
 
 
 @dataclass
@@ -226,7 +186,7 @@ def exact_passes(built, camera: Camera) -> dict:
     """Every registered exact pass from one ray through each pixel centre."""
     import drjit as dr
     import mitsuba as mi
-    ray, d = _camera_rays(camera)
+    ray, d = camera_rays(camera)
     si = built.mi_scene.ray_intersect(ray)
     hit = si.is_valid()
     h = Hit(si, hit, d, dr.select(hit, dr.reinterpret_array(mi.UInt32, si.shape), 0), camera, built)
@@ -268,7 +228,7 @@ def coverage(built, camera: Camera, samples: int, seed: int, exact: dict | None 
         full = {i: (exact["instance"] == i).astype(np.float32).ravel() for i in ids}
     at = slice(None) if pixels is None else pixels
     if pixels is None or len(pixels):
-        ray, _ = _camera_rays(camera, samples, seed=seed, pixels=pixels)
+        ray, _ = camera_rays(camera, samples, seed=seed, pixels=pixels)
         pi = built.mi_scene.ray_intersect_preliminary(ray)
         valid = pi.is_valid()
         one = mi.Float(1.0)
