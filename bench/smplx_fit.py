@@ -2,8 +2,9 @@
 rest, as the published files): random subjects x motions, 60-frame clips (2 s at 30 fps).
 Reports seconds per subject for the shape step and per frame for the pose step (goal: a
 60-frame clip under a minute on 2 cores), and the distribution of per-frame mean and max
-surface distance (mm), joint error (mm) and pose error against the known pose (degrees,
-body joints). Prints JSON.
+surface distance (mm), joint error (mm), pose error against the known pose (degrees, body
+joints) and the world rotation error of the distal joints (ankles, feet, wrists: the errors
+along the chain add up there). Prints JSON.
 
     python bench/smplx_fit.py [--subjects 10] [--motions walk,wave,squat] [--seconds 2]
     python bench/smplx_fit.py --figure docs/smplx_fit.png   # a look at one fitted frame
@@ -25,6 +26,18 @@ def _pct(values) -> dict:
             "p95": round(float(np.percentile(v, 95)), 3), "max": round(float(v.max()), 3)}
 
 
+DISTAL = ("left_ankle", "right_ankle", "left_foot", "right_foot", "left_wrist", "right_wrist")
+
+
+def _global(local: np.ndarray, parents) -> np.ndarray:
+    """World rotations (F, J, 3, 3) from local ones down the kinematic tree (parents before children)."""
+    out = local.copy()
+    for j, p in enumerate(parents):
+        if p >= 0:
+            out[:, j] = out[:, p] @ local[:, j]
+    return out
+
+
 def main(argv=None) -> int:
     import synmitsuba as sm
     from synmitsuba.annotate.smplx_solve import FitSettings, fit_frames, fit_shape
@@ -44,6 +57,9 @@ def main(argv=None) -> int:
     path = write_anny_model(folder, "smplx", rest="tpose")
     model = load_model(folder)
     shape_s, pose_s, frames, mean_mm, max_mm, joint_mm, pose_deg, clips = [], [], 0, [], [], [], [], []
+    distal_deg = []
+    parents = [int(p) for p in model.parents]
+    distal = [model.joint_names.index(n) for n in DISTAL]
     for s in range(args.subjects):
         human = sm.build_subject(sm.sample_subject(np.random.default_rng(1000 + s), {"texture_size": 64}))
         t0 = time.perf_counter()
@@ -60,6 +76,9 @@ def main(argv=None) -> int:
             truth = true_pose(path, human.body, clip)
             err = matrix_to_axis_angle(np.swapaxes(truth, -1, -2) @ axis_angle_to_matrix(fit.pose))
             pose_deg.append(np.degrees(np.linalg.norm(err, axis=-1))[:, :22].mean(1))
+            fitted = _global(axis_angle_to_matrix(fit.pose), parents)[:, distal]
+            g_err = matrix_to_axis_angle(np.swapaxes(_global(truth, parents)[:, distal], -1, -2) @ fitted)
+            distal_deg.append(np.degrees(np.linalg.norm(g_err, axis=-1)))
             mean_mm.append(fit.surface_mean_mm), max_mm.append(fit.surface_max_mm), joint_mm.append(fit.joint_mm)
     os.remove(path)
     print(json.dumps({"bench": "smplx_fit", "model": "synthetic SMPL-X from anny (T-pose rest)",
@@ -70,6 +89,7 @@ def main(argv=None) -> int:
                       "clip_s_shape_plus_pose": {"mean": round(float(np.mean(clips)), 1), "max": round(float(np.max(clips)), 1)},
                       "surface_mean_mm": _pct(mean_mm), "surface_max_mm": _pct(max_mm), "joint_mm": _pct(joint_mm),
                       "pose_error_deg": _pct(pose_deg),
+                      "distal_global_rotation_error_deg": {"joints": list(DISTAL), **_pct(distal_deg)},
                       "flagged_over_10mm": int(sum((m > 10).sum() for m in mean_mm))}, indent=1))
     return 0
 

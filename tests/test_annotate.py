@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from synmitsuba.compose.subjects import PlacedSubject
+from synmitsuba.errors import ConfigError
 
 
 @pytest.fixture(scope="module")
@@ -154,6 +155,16 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
             ev.accumulate()
             ev.summarize()
             assert ev.stats[0] == pytest.approx(1.0), iou
+    sm.export_coco(str(data), str(tmp_path / "index.json"), keypoint_coords="pixel_index")
+    index = json.loads((tmp_path / "index.json").read_text())
+    assert index["info"]["keypoint_coords"] == "pixel_index"
+    for a, b in zip(json.loads(out.read_text())["annotations"], index["annotations"]):  # centres at integers
+        k, kb = np.reshape(a["keypoints"], (-1, 3)), np.reshape(b["keypoints"], (-1, 3))
+        shown = k[:, 2] > 0
+        assert np.allclose(kb[shown, :2], k[shown, :2] - 0.5, rtol=0, atol=1e-9) and (kb[~shown] == 0).all()
+        assert b["bbox"] == a["bbox"] and b["segmentation"] == a["segmentation"]
+    with pytest.raises(ConfigError, match="keypoint_coords = 'centre'"):
+        sm.export_coco(str(data), str(tmp_path / "x.json"), keypoint_coords="centre")
     assert sm.export_humandata(str(data), str(tmp_path / "hd.npz")) == {"subjects": 4}
     hd = np.load(tmp_path / "hd.npz")
     X, K = hd["keypoints3d"][..., :3], hd["cam_param.K"]

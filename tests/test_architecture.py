@@ -302,3 +302,15 @@ def test_library_use_leaves_the_process_as_it_found_it(tmp_path):
     same_env, before, after = json.loads(out.stdout.strip().splitlines()[-1])
     assert same_env, out.stdout.strip().splitlines()[-2]  # the variables that changed
     assert before == after
+
+
+def test_format_document_lists_exactly_the_registered_passes():
+    """docs/FORMAT.md's pass table names the passes ``sample.PASSES`` registers, no more (the
+    coverage and amodal masks are per-instance channels, described below the table)."""
+    import pathlib
+
+    from synmitsuba.sample import PASSES
+    text = (pathlib.Path(__file__).parents[1] / "docs" / "FORMAT.md").read_text()
+    table = text.split("## Passes", 1)[1].split("\n\n", 2)[1]
+    rows = [line.strip("|").split("|")[0] for line in table.splitlines() if line.startswith("| ")][1:]
+    assert {n.strip() for row in rows for n in row.split(",")} == set(PASSES)

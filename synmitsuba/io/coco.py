@@ -6,6 +6,11 @@ v = 2 visible, 1 in the image but occluded (by itself, a subject or an object), 
 (x = y = 0); the 6 foot points in ``foot_kpts`` (COCO-WholeBody order); the visible mask as
 uncompressed RLE (column-major runs, starting with background); its area and tight box
 [x, y, w, h]; the amodal box in ``bbox_amodal``. ``pycocotools`` reads and evaluates the file.
+
+Keypoint coordinates: ``"continuous"`` (default, as in every sample: pixel (0, 0) spans
+[0, 1) x [0, 1), so a pixel's centre is at +0.5) or ``"pixel_index"`` (0.5 less: the centre of
+pixel (i, j) is (i, j), the convention detectron2 and mmpose assume when they add 0.5 to COCO
+keypoints). Boxes and masks are pixel edges either way; the file's ``info`` names the choice.
 """
 from __future__ import annotations
 
@@ -17,6 +22,7 @@ import numpy as np
 from synmitsuba.body.anny_model import KEYPOINTS
 from synmitsuba.io.listing import list_samples
 from synmitsuba.io.exr import read_sample
+from synmitsuba.errors import ConfigError
 from synmitsuba.io.files import atomic_path
 
 COCO_KEYPOINTS = list(KEYPOINTS[:17])
@@ -36,29 +42,36 @@ def rle(mask: np.ndarray) -> dict:
     return {"size": [int(mask.shape[0]), int(mask.shape[1])], "counts": [int(c) for c in counts]}
 
 
-def _keypoints(rec: dict, first: int, count: int) -> list:
+KEYPOINT_COORDS = {"continuous": 0.0, "pixel_index": -0.5}  # added to keypoint x and y
+
+
+def _keypoints(rec: dict, first: int, count: int, shift: float = 0.0) -> list:
     out = []
     for (x, y), v in zip(np.asarray(rec["keypoints2d"])[first:first + count], rec["visibility"][first:first + count]):
         flag = 0 if v == 0 else (2 if v == 1 else 1)
-        out += [float(x), float(y), flag] if flag else [0.0, 0.0, 0]
+        out += [float(x) + shift, float(y) + shift, flag] if flag else [0.0, 0.0, 0]
     return out
 
 
-def _annotation(rec: dict, sample, image_id: int, ann_id: int) -> dict | None:
+def _annotation(rec: dict, sample, image_id: int, ann_id: int, shift: float) -> dict | None:
     visible = sample.instance == rec["instance"]
     if not rec["valid"] or not visible.any():
         return None
     box = rec["bbox_visible"]
-    kps = _keypoints(rec, 0, 17)
+    kps = _keypoints(rec, 0, 17, shift)
     return {"id": ann_id, "image_id": image_id, "category_id": 1, "iscrowd": 0, "segmentation": rle(visible),
             "area": float(visible.sum()), "bbox": [box[0], box[1], box[2] - box[0], box[3] - box[1]],
             "keypoints": kps, "num_keypoints": int(sum(1 for v in kps[2::3] if v > 0)),
-            "foot_kpts": _keypoints(rec, 17, 6), "bbox_amodal": rec["bbox_amodal"], "instance": rec["instance"],
+            "foot_kpts": _keypoints(rec, 17, 6, shift), "bbox_amodal": rec["bbox_amodal"], "instance": rec["instance"],
             "visible_fraction": rec["visible_fraction"]}
 
 
-def export_coco(dataset_dir: str, out_json: str) -> dict:
-    """Write the COCO file for every sample under ``dataset_dir``; returns its counts."""
+def export_coco(dataset_dir: str, out_json: str, keypoint_coords: str = "continuous") -> dict:
+    """Write the COCO file for every sample under ``dataset_dir``; returns its counts.
+    ``keypoint_coords``: ``"continuous"`` or ``"pixel_index"`` (the module docstring)."""
+    if keypoint_coords not in KEYPOINT_COORDS:
+        raise ConfigError("keypoint_coords", keypoint_coords, f"give one of {', '.join(KEYPOINT_COORDS)}")
+    shift = KEYPOINT_COORDS[keypoint_coords]
     base = os.path.dirname(os.path.abspath(out_json))
     images, anns = [], []
     for image_id, stem in enumerate(list_samples(dataset_dir), 1):
@@ -66,10 +79,11 @@ def export_coco(dataset_dir: str, out_json: str) -> dict:
         images.append({"id": image_id, "file_name": os.path.relpath(f"{stem}.png", base),
                        "width": sample.camera.width, "height": sample.camera.height})
         for rec in sample.subjects:
-            ann = _annotation(rec, sample, image_id, len(anns) + 1)
+            ann = _annotation(rec, sample, image_id, len(anns) + 1, shift)
             if ann is not None:
                 anns.append(ann)
-    doc = {"info": {"description": "synmitsuba export", "version": "1"}, "images": images, "annotations": anns,
+    info = {"description": "synmitsuba export", "version": "1", "keypoint_coords": keypoint_coords}
+    doc = {"info": info, "images": images, "annotations": anns,
            "categories": [{"id": 1, "name": "person", "supercategory": "person", "keypoints": COCO_KEYPOINTS,
                            "foot_keypoints": FOOT_KEYPOINTS, "skeleton": COCO_SKELETON}]}
     with atomic_path(out_json) as tmp, open(tmp, "w") as fh:
