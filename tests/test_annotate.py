@@ -275,7 +275,7 @@ def test_every_label_survives_the_files(sm, tmp_path):
            "cameras": {"count": 1, "width": 40, "height": 32, "azimuths": 6, "shells": 1, "pitches": 1, "points": 16,
                        "score_frames": 1}}
     spec = sm.compose_scene(cfg, np.random.default_rng(1))
-    _, _, sample = next(sm.render_sequence(spec, frames=[3], spp=1))
+    _, _, sample = next(sm.render_sequence(spec, frames=[3], spp=1, flow=1))  # flow to clip frames 2 and 4
     sm.write_sample(sample, tmp_path / "x")
     back = sm.read_sample(tmp_path / "x")
     for name in ("flow_fwd", "flow_bwd", "flow_fwd_flag", "body_part", "body_face", "body_bary", "body_depth",
