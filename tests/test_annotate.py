@@ -179,21 +179,28 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
     assert gt.dataset["categories"][0]["foot_keypoints"][3] == "right_big_toe"
 
 
+def _labelled_view(sm, walker, offset, fov_y_deg, size):
+    """The walker at frame 3 rendered and labelled from ``offset`` (x, y, z) beside it, looking
+    at its middle: (sample, rotations, root)."""
+    from synmitsuba.annotate import Annotator
+    scene = _scene(sm, walker)
+    rot, root = walker.motion.frame(3)
+    c = walker.human.keypoints(rot, root)[:, [0, 2]].mean(0)
+    cam = sm.Camera.look_at(eye=(c[0] + offset[0], offset[1], c[1] + offset[2]), target=(c[0], 1.0, c[1]),
+                            fov_y_deg=fov_y_deg, width=size[0], height=size[1])
+    s = sm.render(scene, cam, spp=1)
+    Annotator([walker]).annotate(s, scene, 3)
+    return s, rot, root
+
+
 def test_layered_body_passes_against_the_visible_surface(sm, walker):
     """On skin pixels the body is the visible surface: body depth = depth, the surface point
     (anny face + barycentrics) rebuilt on the posed mesh = the position pass, the part = the
     nearest vertex's part; under the t-shirt the cloth lies millimetres to centimetres off the body."""
     from scipy.spatial import cKDTree
 
-    from synmitsuba.annotate import Annotator
     from synmitsuba.body.segments import PART_NAMES, vertex_parts
-    scene = _scene(sm, walker)
-    rot, root = walker.motion.frame(3)
-    c = walker.human.keypoints(rot, root)[:, [0, 2]].mean(0)
-    cam = sm.Camera.look_at(eye=(c[0] + 0.5, 1.2, c[1] + 2.5), target=(c[0], 1.0, c[1]), fov_y_deg=45, width=72,
-                            height=96)
-    s = sm.render(scene, cam, spp=1)
-    Annotator([walker]).annotate(s, scene, 3)
+    s, rot, root = _labelled_view(sm, walker, (0.5, 1.2, 2.5), 45, (72, 96))
     skin = (s.layer == 1) & (s.body_face > 0)
     assert skin.sum() > 200
     assert np.allclose(s.body_depth[skin], s.depth[skin], atol=2e-4)
@@ -219,14 +226,8 @@ def test_body_normals_are_smooth_across_the_uv_seams(sm, walker):
     """body_normal against the welded mesh's normals (copies of a vertex along uv seams merged by
     position here, area-weighted face normals summed by hand): 99 % of body pixels within 1 deg
     (was 8.4 deg, up to 14 deg next to seams), and on skin within 1 deg of the rendered normals."""
-    from synmitsuba.annotate import Annotator
-    scene = _scene(sm, walker)
-    rot, root = walker.motion.frame(3)
-    c = walker.human.keypoints(rot, root)[:, [0, 2]].mean(0)
-    cam = sm.Camera.look_at(eye=(c[0] + 1.0, 1.3, c[1] + 2.2), target=(c[0], 1.0, c[1]), fov_y_deg=50, width=96,
-                            height=128)
-    s = sm.render(scene, cam, spp=1)
-    Annotator([walker]).annotate(s, scene, 3)
+    s, rot, root = _labelled_view(sm, walker, (1.0, 1.3, 2.2), 50, (96, 128))
+    cam = s.camera
     body = walker.human.pose(rot, root)[0].vertices
     faces = walker.human.parts[0].faces.astype(np.int64)
     _, group = np.unique(np.round(walker.human.parts[0].rest, 7), axis=0, return_inverse=True)
