@@ -1,11 +1,14 @@
 """The names render settings accept (checked by scene files and the CLI before Mitsuba loads):
 Mitsuba sampler plugins (``auto`` picks one: ``choose_sampler``) and denoisers."""
+import functools
+
 from synmitsuba.errors import ConfigError
 
 SAMPLERS = ("auto", "ldsampler", "multijitter", "stratified", "independent")
 DENOISERS = ("none", "oidn")
 
 
+@functools.lru_cache(maxsize=256)
 def _keeps(sampler: str, spp: int) -> bool:
     """Whether Mitsuba's ``sampler`` takes exactly ``spp`` (asked of Mitsuba itself, with its
     rounding warning silenced: rounding is what we are probing for)."""

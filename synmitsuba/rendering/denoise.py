@@ -22,7 +22,6 @@ from synmitsuba.errors import ConfigError
 GUIDE_SPP = 16
 
 
-@functools.lru_cache(maxsize=256)
 @functools.lru_cache(maxsize=4)
 def _aov_integrator(variant: str):
     import mitsuba as mi
