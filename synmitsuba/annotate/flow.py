@@ -4,9 +4,9 @@ Each pixel-centre ray of frame f hits a surface point (eye + t * ray): on a tria
 barycentric coordinates (meshes), or on a curve segment, a share along it and an offset from
 its axis (hair). That same material point is taken to frame g (moved by its triangle's
 corners or its segment's control points from f to g; unmoved shapes keep it exactly) and
-projected with g's camera: flow = its pixel position at g minus the pixel centre at f. Flags (uint8): 0 seen at g, 1 hidden at g
-(the ray from g's eye meets another surface first), 2 outside g's image or behind its camera,
-3 nothing hit at f (background: flow 0).
+projected with g's camera: flow = its pixel position at g minus the pixel centre at f. Flags
+(uint8): 0 seen at g, 1 hidden at g (the ray from g's eye meets another surface first), 2
+outside g's image or behind its camera, 3 nothing hit at f (background: flow 0).
 """
 from __future__ import annotations
 

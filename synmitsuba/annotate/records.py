@@ -105,8 +105,8 @@ class Annotator:
         for i, p in enumerate(self.subjects):
             rot, root = p.motion.frame(int(frame) % p.motion.n_frames)
             visible = sample.passes["instance"] == p.instance
-            amodal = self._amodal(i, p.instance, cam, rays, scene) | visible  # the same rays: a no-op but for a
-            # ray the exact pass and this cast would see differently, which the shared rays rule out
+            # cast along the instance pass's own rays, so the union only guards visible within amodal
+            amodal = self._amodal(i, p.instance, cam, rays, scene) | visible
             rec = self._record(p, rot, root, cam, scene, instances, amodal, visible, *self._posed[i])
             rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
             rec["layer_pixels"] = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}

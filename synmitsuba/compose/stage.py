@@ -1,7 +1,6 @@
 """A plain stage for previews: a large grey ground at y = 0 under a sun and sky."""
 from __future__ import annotations
 
-
 from synmitsuba.geometry import ground_grid
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.materials import Material, SunSky
