@@ -22,13 +22,13 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     import synmitsuba as sm
     from synmitsuba.annotate import Annotator
-    from synmitsuba.pipeline import _add_flow, _GeometryCache, _Neighbours, flow_targets
+    from synmitsuba.annotate.flow import SequenceFlow, flow_targets
     cfg = {"environments": ["plaza"], "subjects": {"count": 4, "motions": ["walk", "idle", "wave", "jog"]},
            "cameras": {"count": args.views, "width": args.res, "height": args.res, "points": 64}}
     spec = sm.compose_scene(cfg, np.random.default_rng(3), seed=3)
     scene, placed = spec.build()
     annotator = Annotator(placed)
-    geometry, neighbours = _GeometryCache(placed), _Neighbours(scene, placed)
+    flows = SequenceFlow(scene, placed)
     render_s, label_s = [], []
     targets = flow_targets(list(range(args.frames)), spec.n_frames, 1)
     for f in range(args.frames):
@@ -40,7 +40,7 @@ def main(argv=None) -> int:
             render_s.append(time.perf_counter() - t)
             t = time.perf_counter()
             annotator.annotate(sample, scene, f, valid=v.valid)
-            _add_flow(sample, scene, placed, v, f, targets[f], geometry, neighbours)
+            flows.add(sample, v.cameras, f, targets[f])
             label_s.append(time.perf_counter() - t)
     steady = slice(len(spec.views), None)  # the first frame's views compile kernels
     print(json.dumps({"subjects": len(placed), "views": len(spec.views), "resolution": args.res, "spp": args.spp,

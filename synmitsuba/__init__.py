@@ -25,12 +25,14 @@ _FROM = {
     "synmitsuba.motion": ("Motion", "load_bvh", "parse_bvh", "BVHError", "load_amass", "smplx_skeleton",
                           "procedural_motion", "MOTION_KINDS", "foot_sliding", "retarget", "humanoid_skeleton",
                           "MotionLibrary", "random_window", "is_allowed", "load_motion"),
-    "synmitsuba.compose": ("load_scene_file", "SceneFile", "add_subjects", "SubjectEntry", "compose_scene",
-                           "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
-    "synmitsuba.pipeline": ("SequenceConfig", "render_sequence_index", "render_sequence"),
+    "synmitsuba.compose": ("load_scene_file", "SceneFile", "scene_spec", "add_subjects", "SubjectEntry",
+                           "compose_scene", "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
+    "synmitsuba.seeds": ("sequence_rng", "render_seed"),
+    "synmitsuba.pipeline": ("render_sequence",),
     "synmitsuba.annotate": ("Annotator", "fit_smplx", "SMPLXFit", "SMPLXOptions", "write_anny_model"),
     "synmitsuba.data": ("SynDataset",),
-    "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "add_body_model_fits"),
+    "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "add_body_model_fits", "sequence_spec",
+                            "write_sequence"),
     "synmitsuba.diff": ("DiffScene", "fit_texture", "FitResult"),
 }
 _EXPORTS = {name: module for module, names in _FROM.items() for name in names}

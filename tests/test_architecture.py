@@ -177,25 +177,76 @@ def test_scene_file_subject_ids_never_meet_object_ids(sm, tmp_path, monkeypatch)
         sm.load_scene_file(tmp_path / "p.yaml")
 
 
-def test_sequence_index_is_reproducible_and_moves_everything_in_place(sm, tmp_path):
+def _scene_config(sm, path, **kw):
+    return sm.GenerateConfig(scene=str(path), frames=3, stride=4, render={"spp": 1}, **kw).to_dict()
+
+
+def test_scene_file_sequence_is_reproducible_and_moves_everything_in_place(sm, tmp_path):
+    """A scene file generates through the one per-task function, seeded from (seed, index)."""
     from synmitsuba.engine.build import STATS
+    from synmitsuba.generate.run import run_sequence
     (tmp_path / "p.yaml").write_text(PEOPLE)
-    cfg = sm.SequenceConfig(scene=str(tmp_path / "p.yaml"), frames=3, stride=4)
+    cfg = _scene_config(sm, tmp_path / "p.yaml", flow="adjacent")  # flow copies built at frame 0 even for one frame
     loads = STATS["loads"]
-    stems = sm.render_sequence_index(cfg, 2, out=str(tmp_path / "a"))
-    assert STATS["loads"] == loads + 1  # hair and meshes moved in place: one Mitsuba load per sequence
-    again = sm.render_sequence_index(cfg, 2, out=str(tmp_path / "b"))
-    for x, y in zip(stems, again):
+    run_sequence({**cfg, "frames": 1}, 2, str(tmp_path / "one"))
+    per_sequence, loads = STATS["loads"] - loads, STATS["loads"]
+    entry = run_sequence(cfg, 2, str(tmp_path / "a"))
+    assert STATS["loads"] - loads == per_sequence  # moved in place: no frame after the first loads a scene
+    run_sequence(cfg, 2, str(tmp_path / "b"))
+    stems = [str(tmp_path / "a" / entry["folder"] / s) for s in entry["samples"]]
+    for x in stems:
+        y = x.replace(str(tmp_path / "a"), str(tmp_path / "b"))
         for ext in (".exr", ".json"):
             assert open(x + ext, "rb").read() == open(y + ext, "rb").read()
     a = [sm.read_sample(s) for s in stems]
     assert not np.array_equal(a[0].mask, a[2].mask)  # the subject walks
-    other = sm.render_sequence_index(cfg, 3, out=str(tmp_path / "c"))
-    assert not np.array_equal(sm.read_sample(other[0]).rgb, a[0].rgb)  # another sequence, another person
+    other = run_sequence(cfg, 3, str(tmp_path / "c"))
+    first = sm.read_sample(tmp_path / "c" / other["folder"] / other["samples"][0])
+    assert not np.array_equal(first.rgb, a[0].rgb)  # another sequence, another person
     side = json.load(open(stems[1] + ".json"))
-    assert side["meta"]["sequence"] == 2 and side["meta"]["frame"] == 1 and "seconds" not in side["meta"]
-    with pytest.raises(ConfigError, match="config.frames"):
-        sm.render_sequence_index({"scene": cfg.scene, "frames": 0}, 0)
+    assert side["meta"]["sequence"] == 2 and side["meta"]["frame"] == 4 and "seconds" not in side["meta"]
+    assert side["meta"]["camera_motion"] == "static" and side["meta"]["flow_frames"] == {"fwd": 5, "bwd": 3}
+    assert side["subjects"][0]["instance"] == 100 and "keypoints2d" in side["subjects"][0]
+    with pytest.raises(ConfigError, match=r"^frames = 0"):
+        sm.GenerateConfig.from_dict({"scene": cfg["scene"], "frames": 0})
+
+
+def test_scene_file_render_is_sequence_zero_of_generate(sm, tmp_path, tiny):
+    """``synmitsuba render`` writes what ``generate`` writes for sequence 0 of a config naming
+    the scene file, byte for byte, with the same label keys and passes as a composed scene."""
+    from synmitsuba.cli import main
+    from synmitsuba.generate.run import generate
+    (tmp_path / "p.yaml").write_text(PEOPLE)
+    assert main(["render", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "r"), "--frames", "3", "--stride", "4",
+                 "--spp", "1", "--quiet"]) == 0
+    generate(sm.GenerateConfig.from_dict({**_scene_config(sm, tmp_path / "p.yaml"), "sequences": 1}),
+             str(tmp_path / "g"), progress=False)
+    names = sorted(p.name for p in (tmp_path / "r").iterdir())
+    assert names == sorted(p.name for p in (tmp_path / "g" / "seq_000000").iterdir()) and len(names) == 10
+    for n in names:
+        assert (tmp_path / "r" / n).read_bytes() == (tmp_path / "g" / "seq_000000" / n).read_bytes(), n
+    mine, composed = sm.read_sample(tmp_path / "r" / "f0000_cam"), sm.read_sample(tiny / "seq_000000" / "f0000_cam0")
+    assert set(mine.subjects[0]) == set(composed.subjects[0])
+    assert set(mine.passes) == set(composed.passes)
+    assert set(mine.meta) == set(composed.meta)
+
+
+def test_scene_file_spec_round_trips_and_rebuilds_the_same_scene(sm, tmp_path):
+    """A scene file's SceneSpec, written and read back, builds the same meshes and curves; its
+    subject shows the entry's ``frame`` first and stands on the ground."""
+    from synmitsuba.compose.scenefile import scene_spec
+    (tmp_path / "p.yaml").write_text(PEOPLE.replace("motion: walk", "motion: walk, frame: 7"))
+    spec = scene_spec(str(tmp_path / "p.yaml"), str(tmp_path / "p.yaml"), sm.sequence_rng(0, 0))
+    again = sm.SceneSpec.from_json(spec.to_json())
+    assert again.stage == "scene_file" and again.subjects[0].motion.start == 7 and len(again.views[0].cameras) == 60
+    a, b = spec.build()[0], again.build()[0]
+    assert set(a.meshes) == set(b.meshes) and set(a.curves) == set(b.curves)
+    for name in a.meshes:
+        assert np.array_equal(a.meshes[name].vertices, b.meshes[name].vertices), name
+    placed = again.build()[1][0]
+    lowest = min(lay.vertices[:, 1].min() for f in range(placed.motion.n_frames)
+                 for lay in placed.human.pose(*placed.motion.frame(f), resolve=False) if not lay.is_curves)
+    assert abs(lowest) < 1e-6  # the clip's lowest point over the clip is on the ground
 
 
 def test_scene_keeps_the_previous_positions_for_flow(sm):

@@ -36,15 +36,16 @@ def scene_dir(tmp_path):
 def test_render_command_writes_every_view(sm, scene_dir, capsys):
     out = scene_dir / "out"
     assert main(["render", str(scene_dir / "s.yaml"), "--out", str(out), "--res", "32x24", "--quiet"]) == 0
-    for name in ("front", "offaxis"):
+    for name in ("f0000_front", "f0000_offaxis"):
         side = json.loads((out / f"{name}.json").read_text())
         assert side["width"] == 32 and side["height"] == 24 and side["meta"]["spp"] == 4
         s = sm.read_sample(out / name)
         assert s.rgb.shape == (24, 32, 3) and s.rgb.max() > 0.05
-    front = sm.read_sample(out / "front")
+    front = sm.read_sample(out / "f0000_front")
     assert {4, 5} <= set(np.unique(front.instance))
     assert (front.layer[front.mask & (front.instance == 0)] == int(sm.Layer.GROUND)).all()
-    assert "front.png" in capsys.readouterr().out
+    assert "f0000_front.png" in capsys.readouterr().out
+    assert sm.SceneSpec.from_json((out / "scene.json").read_text()).views[1].name == "offaxis"
 
 
 def test_info_names_variant_and_llvm(sm, capsys):
@@ -104,7 +105,7 @@ def test_scene_file_with_a_posed_subject(sm, tmp_path):
           - {name: cam, look_at: {eye: [0, 1.0, 4.0], target: [0, 0.9, 0], fov_y_deg: 40}}
     """))
     assert main(["render", str(tmp_path / "people.yaml"), "--out", str(tmp_path / "o"), "--quiet"]) == 0
-    s = sm.read_sample(tmp_path / "o" / "cam")
+    s = sm.read_sample(tmp_path / "o" / "f0000_cam")
     assert set(np.unique(s.instance)) == {0, 21}
     assert int(sm.Layer.BODY) in set(np.unique(s.layer))
     (tmp_path / "bad.yaml").write_text((tmp_path / "people.yaml").read_text().replace("motion: walk", "motion: moonwalk"))

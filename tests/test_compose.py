@@ -35,12 +35,11 @@ def _walker(rng, frames=20):
 def real_clips(sm):
     """Per-frame ground hulls of real subjects (all layers) over 1-second walk, jog, side-step
     and wave clips, centred as composition centres them."""
-    from synmitsuba.compose.composition import SubjectsConfig, _subject_clip
-    cfg = SubjectsConfig(seconds=1.0)
+    from synmitsuba.compose.subjects import MotionSpec, clip_bounds
     clips = []
     for i, kind in enumerate(["walk", "jog", "side_step", "wave"]):
         human = sm.build_subject(sm.sample_subject(np.random.default_rng(10 + i), {"texture_size": 64}))
-        clips.append(_subject_clip(human, kind, i, cfg, "", i)[0])
+        clips.append(clip_bounds(human, MotionSpec(kind, i, 1.0, 30.0))[0])
     return clips
 
 
@@ -345,7 +344,7 @@ def test_motions_from_a_bvh_folder(sm, tmp_path):
     cfg = {**SMALL, "base": str(tmp_path), "subjects": {**SMALL["subjects"], "count": 1, "motions": ["mocap"]},
            "cameras": {**SMALL["cameras"], "count": 1, "motion": ["static"]}}
     spec = sm.compose_scene(cfg, np.random.default_rng(0))
-    assert spec.subjects[0].motion["source"].endswith((".bvh",)) and spec.n_frames == 15
+    assert spec.subjects[0].motion.source.endswith((".bvh",)) and spec.n_frames == 15
     assert np.ptp(spec.subjects[0].frames[:, [0, 2]]) > 0.2  # the footprint follows the take's walk
     back = sm.SceneSpec.from_json(spec.to_json())
     assert np.array_equal(back.motions[0].root_translation, spec.motions[0].root_translation)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from synmitsuba.engine.build import build
 from synmitsuba.engine.raycast import cast, surface_hits
 from synmitsuba.engine.rays import pixel_centre_rays
 from synmitsuba.errors import ConfigError
@@ -154,3 +155,73 @@ def _hidden(scene: Scene, eye, points, now: Geometry, then: Geometry) -> np.ndar
             scene.curves[n].previous_points = prev
         for n, prev in previous.items():
             scene.meshes[n].previous_vertices = prev
+
+
+class _GeometryCache:
+    """Subjects' geometry by frame, kept for the three frames flow needs at a time."""
+
+    def __init__(self, placed):
+        self.placed, self.frames = placed, {}
+
+    def __call__(self, frame: int):
+        if frame not in self.frames:
+            if len(self.frames) > 3:  # drop the frame farthest from this one
+                self.frames.pop(max(self.frames, key=lambda k: abs(k - frame)))
+            self.frames[frame] = subjects_geometry(self.placed, frame)
+        return self.frames[frame]
+
+
+class _Neighbours:
+    """Plain copies of the scene held at neighbouring frames for flow's visibility tests. Three
+    of them, each kept at its frame while it is still of use: frame f asks for the next and
+    previous ones, and the previous one is the copy moved to it for that frame's forward flow,
+    so one copy moves a frame (two did with a copy for each side: each move is a BVH rebuilt, 30-70 ms with hair)."""
+
+    def __init__(self, scene, placed):
+        self.placed, self.scene, self.copies, self.at = placed, scene, [], []
+
+    def __call__(self, g: int, f: int):
+        if not self.copies:  # all at once: every load happens on the first frame
+            self.copies = [geometry_copy(self.scene) for _ in range(3)]
+            for copy in self.copies:
+                build(copy)
+            self.at = [None] * 3
+        if g not in self.at:  # move the copy whose frame lies farthest from f (or none yet)
+            k = max(range(3), key=lambda k: np.inf if self.at[k] is None else abs(self.at[k] - f))
+            for p in self.placed:
+                p.pose_in(self.copies[k], g)
+            self.at[k] = g
+        return self.copies[self.at.index(g)]
+
+
+def flow_targets(frames: list, n_frames: int, flow: str | int) -> list[dict]:
+    """Per rendered frame, the frames its flow goes to: ``{"fwd": g, "bwd": h}`` (a side left
+    out where there is none). ``"rendered"``: the next and previous entries of ``frames``; an
+    int k: clip frames f + k and f - k inside the clip."""
+    if flow == "rendered":
+        return [{**({"fwd": int(frames[i + 1])} if i + 1 < len(frames) else {}),
+                 **({"bwd": int(frames[i - 1])} if i > 0 else {})} for i in range(len(frames))]
+    if isinstance(flow, bool) or not isinstance(flow, (int, np.integer)) or flow < 1:
+        raise ConfigError("flow", flow, "give 'rendered' (to the neighbouring rendered frames) or a number of clip "
+                          "frames >= 1")
+    return [{side: int(f + s * flow) for side, s in (("fwd", 1), ("bwd", -1)) if 0 <= f + s * flow < n_frames}
+            for f in frames]
+
+
+class SequenceFlow:
+    """Exact flow for the frames of a sequence rendered in order: the subjects' geometry and
+    the neighbour scenes are kept for the few frames flow needs at a time."""
+
+    def __init__(self, scene: Scene, placed: list):
+        self.scene, self.geometry, self.neighbours = scene, _GeometryCache(placed), _Neighbours(scene, placed)
+
+    def add(self, sample, cameras: list, f: int, targets: dict) -> None:
+        """Forward and backward flow of ``sample`` (frame ``f`` of a view whose camera at frame g
+        is ``cameras[g]``) to ``targets`` (``flow_targets``), from one cast of the pixel-centre
+        rays; the targets go to the meta's ``flow_frames``."""
+        hits = pixel_hits(self.scene, cameras[f])
+        for side, g in targets.items():
+            flow, flags = exact_flow(self.scene, cameras[f], cameras[g], self.geometry(f), self.geometry(g),
+                                     self.neighbours(g, f), hits)
+            sample.passes[f"flow_{side}"], sample.passes[f"flow_{side}_flag"] = flow, flags
+        sample.meta["flow_frames"] = dict(targets)

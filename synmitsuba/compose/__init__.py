@@ -4,6 +4,7 @@ environments, whole-clip placement, cameras scored by ray-cast occlusion, camera
 from synmitsuba._lazy import lazy_exports
 
 _EXPORTS = {"load_scene_file": "synmitsuba.compose.scenefile", "SceneFile": "synmitsuba.compose.scenefile",
+            "scene_spec": "synmitsuba.compose.scenefile",
             "add_subjects": "synmitsuba.compose.subjects", "SubjectEntry": "synmitsuba.compose.subjects",
             "PlacedSubject": "synmitsuba.compose.subjects", "compose_scene": "synmitsuba.compose.composition",
             "ComposeConfig": "synmitsuba.compose.composition", "SceneSpec": "synmitsuba.compose.spec",

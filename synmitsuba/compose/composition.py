@@ -3,24 +3,22 @@ sampled and placed over their whole clips, cameras placed and scored by ray-cast
 The config is a ``ComposeConfig`` or its dict (YAML: ``configs/compose.yaml`` shows every key)."""
 from __future__ import annotations
 
-import glob
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.body.recipe import SubjectConfig, sample_subject
+from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
+from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose import cameras as cams
 from synmitsuba.compose.environments import environment_names, load_environment, object_boxes, sample_lighting
 from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
-from synmitsuba.compose.occlusion import in_view, occlusion, surface_samples
-from synmitsuba.compose.placement import PlacementConfig, frame_hulls, place_subjects
-from synmitsuba.compose.spec import SceneSpec, SubjectSpec, ViewSpec, clip_motion, resolve_environment
-from synmitsuba.compose.subjects import place_motion
+from synmitsuba.compose.occlusion import score_views
+from synmitsuba.compose.placement import PlacementConfig, place_subjects
+from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
+from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, clip_bounds
 from synmitsuba.errors import ConfigError
 from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
-
-MOTION_FILES = ("*.bvh", "*.npz")
 
 
 @dataclass
@@ -45,34 +43,18 @@ class ComposeConfig(Params):
 
 def _motion_sources(cfg: SubjectsConfig, base: str) -> list[str]:
     """Motion entries with folders expanded into their files (sorted: the same on every machine)."""
+    from synmitsuba.motion.sources import motion_files
     out = []
     for i, m in enumerate(cfg.motions):
         path = os.path.join(base, m)
         if os.path.isdir(path):
-            files = sorted(f for pattern in MOTION_FILES for f in glob.glob(os.path.join(path, pattern)))
+            files = motion_files(path)
             if not files:
                 raise ConfigError(f"subjects.motions[{i}]", m, "the folder holds no .bvh or .npz files")
             out += files
         else:
             out.append(m)
     return out
-
-
-def _subject_clip(human, source: str, seed: int, cfg: SubjectsConfig, base: str, i: int):
-    """The per-frame ground hulls of the subject's clip centred on its mean root position, its
-    tallest point over the clip and the lift that puts its lowest point over the clip on the
-    ground (retargeting keeps the source's root height, not the new legs' contact)."""
-    from synmitsuba.motion.retargeting import retarget
-    motion = place_motion(retarget(clip_motion(source, seed, cfg.seconds, cfg.fps, base, f"subjects[{i}].motion"),
-                                   human.skeleton), (0.0, 0.0), 0.0)
-    xz, height, low = [], -np.inf, np.inf
-    for f in range(motion.n_frames):
-        layers = human.pose(*motion.frame(f), resolve=False)  # a few mm do not change a hull
-        pts = np.concatenate([(lay.points.reshape(-1, 3) if lay.is_curves else lay.vertices) for lay in layers])
-        xz.append(pts[:, [0, 2]])
-        height = max(height, float(pts[:, 1].max()))
-        low = min(low, min(float(lay.vertices[:, 1].min()) for lay in layers if not lay.is_curves))
-    return frame_hulls(xz), height - low, -low
 
 
 def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
@@ -86,23 +68,6 @@ def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
     centres = mid(fr).mean(1)
     centre = mid(np.stack([s.footprint for s in subjects])).mean(0)
     return cams.Group(centres, centre, boxes, frame_boxes)
-
-
-def _score(scene, placed, subjects, trajs, frames, cfg: cams.CameraConfig, rng) -> tuple[np.ndarray, np.ndarray]:
-    """Occlusion and in-view share (C, S) of every candidate, averaged over ``frames``."""
-    body = [p.human.parts[0] for p in placed]
-    samples = [surface_samples(b.rest, b.faces, cfg.points, rng) for b in body]
-    occ = np.zeros((len(trajs), len(placed)))
-    seen = np.zeros_like(occ)
-    for f in frames:
-        for p in placed:
-            p.pose_in(scene, f)
-        views = [_camera_at(t, f, cfg) for t in trajs]
-        for s, (p, smp) in enumerate(zip(placed, samples)):
-            pts = smp.on(scene.meshes[f"{p.prefix}_body"].vertices)  # posed just above
-            occ[:, s] += occlusion(scene, np.stack([t.eye[f] for t in trajs]), pts, p.instance)
-            seen[:, s] += [in_view(cam, pts) for cam in views]
-    return occ / len(frames), seen / len(frames)
 
 
 def _camera_at(t: cams.Trajectory, f: int, cfg: cams.CameraConfig):
@@ -127,26 +92,38 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     sc = cfg.subjects
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
     sources = _motion_sources(sc, cfg.base)
-    from synmitsuba.body.subject import build_subject
-    drafts = []
-    for i in range(count):
-        recipe = sample_subject(np.random.default_rng(int(rng.integers(2 ** 31))), sc.config)
-        source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
-        human = build_subject(recipe)
-        hulls, height, lift = _subject_clip(human, source, mseed, sc, cfg.base, i)
-        drafts.append((recipe, {"source": source, "seed": mseed, "seconds": sc.seconds, "fps": sc.fps,
-                                "base": cfg.base}, hulls, height, human, lift))
+    drafts = [_draft(sc, sources, cfg.base, i, rng) for i in range(count)]
     boxes = object_boxes(env)
-    placements = place_subjects([d[2] for d in drafts], env.area, boxes[:, [0, 2, 3, 5]], cfg.placement, rng)
+    placements = place_subjects([d.hulls for d in drafts], env.area, boxes[:, [0, 2, 3, 5]], cfg.placement, rng)
     first = first_subject_instance(OBJECT_INSTANCE + len(env.objects) - 1)
-    subjects = [SubjectSpec(d[0], d[1], p.position, p.yaw_deg, first + i, p.footprint, p.frames, d[3], d[5])
+    subjects = [SubjectSpec(d.recipe, d.motion, p.position, p.yaw_deg, first + i, p.footprint, p.frames, d.height, d.lift)
                 for i, (d, p) in enumerate(zip(drafts, placements))]
     n_frames = len(placements[0].frames)
     spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, subjects, [], n_frames, sc.fps, [], seed,
                       cfg.to_dict())
-    spec_.build([d[4] for d in drafts])
+    spec_.build([d.human for d in drafts])
     spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
     return spec_
+
+
+@dataclass
+class _Draft:
+    """A sampled subject before placement: its clip's per-frame hulls decide where it fits."""
+
+    recipe: SubjectRecipe
+    motion: MotionSpec
+    human: LayeredHuman
+    hulls: list
+    height: float
+    lift: float
+
+
+def _draft(sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:
+    recipe = sample_subject(np.random.default_rng(int(rng.integers(2 ** 31))), sc.config)
+    source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
+    human = build_subject(recipe)
+    motion = MotionSpec(source, mseed, sc.seconds, sc.fps, base)
+    return _Draft(recipe, motion, human, *clip_bounds(human, motion, f"subjects[{i}].motion"))
 
 
 def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> tuple[list, list]:
@@ -155,7 +132,8 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
     cams.check_count(len(trajs), cfg, group)
     frames = sorted({int(round(x)) for x in np.linspace(0, spec_.n_frames - 1, min(cfg.score_frames, spec_.n_frames))})
     scene, placed = spec_.build()
-    occ, seen = _score(scene, placed, spec_.subjects, trajs, frames, cfg, rng)
+    at = [lambda f, t=t: (t.eye[f], _camera_at(t, f, cfg)) for t in trajs]
+    occ, seen = score_views(scene, placed, at, frames, cfg.points, rng)
     score = ((1 - occ) * seen).mean(1)
     chosen = list(range(len(trajs))) if cfg.mode == "ring" else cams.choose_views(
         score, np.array([_azimuth(t, group.centre) for t in trajs]), cfg.count, cfg.score_tolerance)

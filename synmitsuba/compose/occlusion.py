@@ -45,3 +45,23 @@ def in_view(camera: Camera, points: np.ndarray) -> float:
     uv, z = camera.project(points)
     ok = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)
     return float(ok.mean())
+
+
+def score_views(scene, placed: list, views: list, frames: list, points: int,
+                rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Occlusion and in-view share (V, S) of every view for every placed subject, averaged
+    over ``frames``; a view is a function of the frame giving ``(eye (3,), Camera)``. Leaves
+    the subjects posed at the last frame."""
+    samples = [surface_samples(p.human.parts[0].rest, p.human.parts[0].faces, points, rng) for p in placed]
+    occ = np.zeros((len(views), len(placed)))
+    seen = np.zeros_like(occ)
+    for f in frames:
+        for p in placed:
+            p.pose_in(scene, f)
+        at = [view(f) for view in views]
+        eyes = np.stack([eye for eye, _ in at])
+        for s, (p, smp) in enumerate(zip(placed, samples)):
+            pts = smp.on(scene.meshes[f"{p.prefix}_body"].vertices)  # posed just above
+            occ[:, s] += occlusion(scene, eyes, pts, p.instance)
+            seen[:, s] += [in_view(cam, pts) for _, cam in at]
+    return occ / len(frames), seen / len(frames)

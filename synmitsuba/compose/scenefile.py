@@ -1,5 +1,8 @@
 """Scene files (YAML): render settings, objects (trimesh primitives or mesh files), materials,
-lights, an environment, cameras and subjects. See ``scenes/demo.yaml`` for every key.
+lights, an environment, cameras and subjects. See ``scenes/demo.yaml`` for every key. A scene
+file compiles to a ``SceneSpec`` (``scene_spec``) like a composed scene: its objects and lights
+are the stage, each camera a static view, its subjects placed as written; so it renders and is
+labelled by the same ``render_sequence``.
 
 The whole file is checked before anything is built (a typo in the last camera is reported
 before seconds of subject building); errors name the key path (``objects[2].mesh``,
@@ -12,7 +15,8 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from synmitsuba.compose.subjects import PlacedSubject, SubjectEntry, add_subjects, subject_instances
+from synmitsuba.compose.spec import SceneSpec, ViewSpec
+from synmitsuba.compose.subjects import ClipSettings, PlacedSubject, SubjectEntry, subject_instances, subject_specs
 from synmitsuba.errors import ConfigError
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
@@ -113,6 +117,7 @@ class SceneDoc(Params):
     objects: list = spec(factory=list, check=ListOf(Nested(ObjectSpec)))
     cameras: list = spec(check=ListOf(Nested(CameraSpec), 1), doc="at least one camera")
     subjects: list = spec(factory=list, check=ListOf(Nested(SubjectEntry)))
+    clip: ClipSettings = spec(factory=ClipSettings, check=Nested(ClipSettings), doc="the subjects' clips")
 
     def __post_init__(self):
         subject_instances(self.subjects, set(self.object_instances()))  # ids clash: fail before building
@@ -208,28 +213,80 @@ def read_scene_doc(path: str) -> SceneDoc:
     return SceneDoc.from_dict(read_yaml(path, "scene file", "objects, cameras, ..."), "")
 
 
+def check_scene_file(path: str, where: str = "") -> SceneDoc:
+    """The scene file read and every key and file it names checked (nothing built); errors
+    name the key path in the file (after ``where``, the setting that named the file), the
+    value and the fix."""
+    if not os.path.isfile(path):
+        raise ConfigError(where or "scene file", path, "no such file; give a YAML scene file (scenes/demo.yaml shows "
+                          "every key)")
+    try:
+        doc = read_scene_doc(path)
+        base = os.path.dirname(os.path.abspath(path))
+        for i, e in enumerate(doc.subjects):
+            e.check_files(f"subjects[{i}]", base)
+        for i, o in enumerate(doc.objects):
+            if o.mesh is not None and not os.path.isfile(os.path.join(base, o.mesh)):
+                raise ConfigError(f"objects[{i}].mesh", o.mesh, "file not found; paths are relative to the scene file")
+    except ConfigError as exc:
+        if not where:
+            raise
+        raise ConfigError(f"{where}: {exc.field}", exc.value, f"{exc.fix} (in {path})") from None
+    return doc
+
+
 def load_scene_file(path: str, seed: int | None = None, subjects: bool = True) -> SceneFile:
     """Parse a YAML scene file into a Scene with its objects, lights, environment and (unless
-    ``subjects=False``) its subjects posed; plus its cameras and render settings. ``seed``
-    (default ``render.seed``) seeds the subjects' motions."""
-    return scene_from_doc(read_scene_doc(path), path, seed, subjects)
+    ``subjects=False``) its subjects posed at their first frame; plus its cameras and render
+    settings. ``seed`` (default ``render.seed``) is the global seed of ``scene_spec``."""
+    doc = read_scene_doc(path)
+    if not subjects:
+        return SceneFile(static_scene(doc, path), _cameras(doc), doc.render, [], os.fspath(path))
+    from synmitsuba.seeds import sequence_rng
+    spec_ = scene_spec(doc, path, sequence_rng(doc.render.seed if seed is None else seed, 0))
+    scene, placed = spec_.build()
+    return SceneFile(scene, _cameras(doc), doc.render, placed, os.fspath(path))
 
 
-def scene_from_doc(doc: SceneDoc, path: str, seed: int | None = None, subjects: bool = True) -> SceneFile:
-    """``load_scene_file`` for a document already read (``read_scene_doc``); relative paths
-    are taken from ``path``'s folder."""
+def static_scene(doc: SceneDoc, path: str) -> Scene:
+    """The scene file's objects, environment and lights; relative paths are taken from
+    ``path``'s folder."""
     base = os.path.dirname(os.path.abspath(path))
     materials = {name: _material(m, {}, f"materials.{name}") for name, m in doc.materials.items()}
     scene = Scene()
     for i, (obj, instance) in enumerate(zip(doc.objects, doc.object_instances())):
         _add_object(scene, obj, i, instance, materials, base)
     if doc.environment is not None:
-        env = _typed(ENVIRONMENTS, doc.environment, "environment", base)
-        scene.set_environment(env)
+        scene.set_environment(_typed(ENVIRONMENTS, doc.environment, "environment", base))
     for i, light in enumerate(doc.lights):
         scene.add_light(_typed(LIGHTS, light, f"lights[{i}]", base))
-    cams = [_camera(c, f"cameras[{i}]", doc.render) for i, c in enumerate(doc.cameras)]
-    placed = []
-    if subjects and doc.subjects:
-        placed = add_subjects(scene, doc.subjects, seed=doc.render.seed if seed is None else seed, base=base)
-    return SceneFile(scene, cams, doc.render, placed, os.fspath(path))
+    return scene
+
+
+def _cameras(doc: SceneDoc) -> list[tuple[str, Camera]]:
+    return [_camera(c, f"cameras[{i}]", doc.render) for i, c in enumerate(doc.cameras)]
+
+
+def scene_spec(doc: SceneDoc | str, path: str, rng: np.random.Generator, seed: int | None = None) -> SceneSpec:
+    """The scene file as a ``SceneSpec``: its subjects built from ``rng`` (a recipe seed for
+    those without one, a motion seed each) and placed as written, each camera a static view
+    scored for occlusion like a composed scene's. ``seed`` is only recorded."""
+    from synmitsuba.compose.cameras import CameraConfig
+    from synmitsuba.compose.occlusion import score_views
+    doc = read_scene_doc(doc) if isinstance(doc, str) else doc
+    path = os.path.abspath(path)
+    subjects, humans = subject_specs(doc.subjects, rng, set(doc.object_instances()), os.path.dirname(path), doc.clip)
+    n_frames = len(subjects[0].frames) if subjects else max(1, int(round(doc.clip.seconds * doc.clip.fps)))
+    spec_ = SceneSpec(path, {}, 0, subjects, [], n_frames, doc.clip.fps, [], seed, stage="scene_file")
+    scene, placed = spec_.build(humans)
+    cams, cfg = _cameras(doc), CameraConfig()
+    frames = sorted({int(round(x)) for x in np.linspace(0, n_frames - 1, min(cfg.score_frames, n_frames))})
+    at = [lambda f, c=c: (c.center, c) for _, c in cams]
+    occ, seen = score_views(scene, placed, at, frames, cfg.points, rng)
+    spec_.views = [ViewSpec(name, "static", [cam] * n_frames, occ[k], seen[k],
+                            (occ[k] <= cfg.occlusion_max) & (seen[k] >= cfg.in_view_min))
+                   for k, (name, cam) in enumerate(cams)]
+    spec_.scored_frames = frames
+    for p in placed:
+        p.pose_in(scene, 0)
+    return spec_

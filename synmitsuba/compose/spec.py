@@ -1,6 +1,7 @@
-"""``SceneSpec``: a composed scene as data — environment and its drawn lighting, subjects
-(recipe, motion source, placement, per-frame footprints) and views (a camera per frame,
-occlusion, validity). ``to_json`` / ``from_json`` round-trip it exactly (floats are written
+"""``SceneSpec``: a scene as data — its stage (a composed environment with its drawn lighting,
+or a scene file's objects and lights), subjects (recipe, motion source, placement, per-frame
+footprints) and views (a camera per frame, occlusion, validity); a scene file's static camera
+is a view whose cameras are all the same. ``to_json`` / ``from_json`` round-trip it exactly (floats are written
 with Python's shortest exact repr), and ``build`` rebuilds the same scene bit for bit: the
 subjects and their clips are regenerated from their recipes and motion seeds, which are
 deterministic."""
@@ -9,51 +10,18 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.recipe import SubjectRecipe
+
 from synmitsuba.compose.environments import SCENES_DIR, add_environment, load_environment
-from synmitsuba.compose.subjects import PlacedSubject, place_motion
+from synmitsuba.compose.subjects import PlacedSubject, SubjectSpec, placed_subject
 from synmitsuba.errors import ConfigError
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
 
 FORMAT = "synmitsuba.scenespec/1"
-
-
-def clip_motion(source: str, seed: int, seconds: float, fps: float, base: str = "", field_: str = "motion"):
-    """The clip a motion entry names: a procedural kind drawn with ``seed``, or a random
-    ``seconds`` window (from ``seed``) of a .bvh / AMASS file, at ``fps``."""
-    from synmitsuba.motion.library import random_window
-    from synmitsuba.motion.sources import load_motion
-    rng = np.random.default_rng(seed)
-    m = load_motion(source, rng, seconds=seconds, base=base, field=field_)
-    return random_window(m, rng, seconds, fps)
-
-
-@dataclass
-class SubjectSpec:
-    recipe: SubjectRecipe
-    motion: dict           # {"source", "seed", "seconds", "fps", "base"}
-    position: tuple        # (x, z) of the clip's mean root position
-    yaw_deg: float
-    instance: int
-    footprint: np.ndarray  # (4,) whole-clip ground box (x_min, z_min, x_max, z_max)
-    frames: np.ndarray     # (F, 4) per-frame ground boxes
-    height: float          # tallest point over the clip, metres
-    lift: float = 0.0      # metres the clip is raised so its lowest point over the clip is on the ground
-
-    def to_dict(self) -> dict:
-        return {"recipe": json.loads(self.recipe.to_json()), "motion": dict(self.motion),
-                "position": [float(v) for v in self.position], "yaw_deg": float(self.yaw_deg),
-                "instance": int(self.instance), "footprint": self.footprint.tolist(),
-                "frames": self.frames.tolist(), "height": float(self.height), "lift": float(self.lift)}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "SubjectSpec":
-        return cls(SubjectRecipe.from_dict(d["recipe"]), dict(d["motion"]), tuple(d["position"]), d["yaw_deg"],
-                   d["instance"], np.asarray(d["footprint"], float), np.asarray(d["frames"], float), d["height"], d["lift"])
 
 
 @dataclass
@@ -80,7 +48,7 @@ class ViewSpec:
 class SceneSpec:
     """A composed scene; ``build()`` gives the ``Scene`` and its posable subjects."""
 
-    environment: str           # a name in scenes/environments or a path
+    environment: str           # stage "environment": a name in scenes/environments or a path; "scene_file": its path
     lighting: dict             # from environments.sample_lighting
     ground_seed: int
     subjects: list             # SubjectSpec
@@ -90,11 +58,13 @@ class SceneSpec:
     scored_frames: list
     seed: int | None = None
     config: dict = field(default_factory=dict)
+    stage: str = "environment"  # a name in STAGES: what builds the scene around the subjects
     _built: tuple | None = field(default=None, repr=False, compare=False)
 
     # -- data ----------------------------------------------------------------------------
     def to_json(self, indent: int | None = None) -> str:
-        return json.dumps({"format": FORMAT, "seed": self.seed, "environment": self.environment,
+        stage = {} if self.stage == "environment" else {"stage": self.stage}
+        return json.dumps({"format": FORMAT, "seed": self.seed, **stage, "environment": self.environment,
                            "lighting": self.lighting, "ground_seed": int(self.ground_seed),
                            "n_frames": int(self.n_frames), "fps": float(self.fps),
                            "scored_frames": [int(f) for f in self.scored_frames], "config": self.config,
@@ -108,7 +78,7 @@ class SceneSpec:
             raise ConfigError("scene spec format", d.get("format"), f"this synmitsuba reads {FORMAT}")
         return cls(d["environment"], d["lighting"], d["ground_seed"], [SubjectSpec.from_dict(s) for s in d["subjects"]],
                    [ViewSpec.from_dict(v) for v in d["views"]], d["n_frames"], d["fps"], d["scored_frames"],
-                   d.get("seed"), d.get("config", {}))
+                   d.get("seed"), d.get("config", {}), d.get("stage", "environment"))
 
     def view(self, name: str) -> ViewSpec:
         for v in self.views:
@@ -123,9 +93,7 @@ class SceneSpec:
         ``humans`` (one ``LayeredHuman`` per subject, built from the same recipes) saves
         building them again."""
         if self._built is None:
-            env = load_environment(self.environment)
-            scene = Scene()
-            add_environment(scene, env, self.lighting, np.random.default_rng(self.ground_seed))
+            scene = STAGES[self.stage](self)
             placed = self.placed_subjects(humans)
             for subject in placed:
                 subject.pose_in(scene, 0)
@@ -135,21 +103,28 @@ class SceneSpec:
     def placed_subjects(self, humans: list | None = None) -> list[PlacedSubject]:
         """The subjects with their placed clips, without building a scene (labels computed
         after the fact, e.g. body-model fits, need no renderer)."""
-        from synmitsuba.body.subject import build_subject
-        from synmitsuba.motion.retargeting import retarget
-        placed = []
-        for i, s in enumerate(self.subjects):
-            human = humans[i] if humans is not None else build_subject(s.recipe)
-            m = s.motion
-            clip = clip_motion(m["source"], m["seed"], m["seconds"], m["fps"], m.get("base", ""), f"subjects[{i}].motion")
-            motion = place_motion(retarget(clip, human.skeleton), s.position, s.yaw_deg, s.lift)
-            placed.append(PlacedSubject(human, motion, 0, s.instance, f"subject{i}"))
-        return placed
+        return [placed_subject(s, i, None if humans is None else humans[i]) for i, s in enumerate(self.subjects)]
 
     @property
     def motions(self) -> list:
         """The subjects' placed, retargeted clips."""
         return [p.motion for p in self.build()[1]]
+
+
+def _environment_stage(spec: SceneSpec) -> Scene:
+    """A composed scene's environment: ground, objects and the drawn lighting."""
+    scene = Scene()
+    add_environment(scene, load_environment(spec.environment), spec.lighting, np.random.default_rng(spec.ground_seed))
+    return scene
+
+
+def _scene_file_stage(spec: SceneSpec) -> Scene:
+    """A scene file's objects, environment and lights (its subjects are the spec's)."""
+    from synmitsuba.compose.scenefile import read_scene_doc, static_scene
+    return static_scene(read_scene_doc(spec.environment), spec.environment)
+
+
+STAGES: dict[str, Callable[[SceneSpec], Scene]] = {"environment": _environment_stage, "scene_file": _scene_file_stage}
 
 
 def resolve_environment(name: str) -> str:

@@ -1,21 +1,23 @@
-"""Subjects in a scene: a recipe (sampled or from a file), a motion retargeted onto it, a
-placement (position, yaw) and a frame. A subject entry (scene files' ``subjects:`` list) reads
-``{seed: 3, position: [x, z], yaw_deg: 30, motion: walk, frame: 20, recipe: file.json,
-instance: 5, config: {...}}``; every key is optional."""
+"""Subjects in a scene, built, retargeted and placed in one place for composed scenes and scene
+files alike. A ``SubjectSpec`` is a subject as data (recipe, where its clip comes from, where
+it stands); ``placed_subject`` turns one into a posable ``PlacedSubject``. A subject entry
+(scene files' ``subjects:`` list) reads ``{seed: 3, position: [x, z], yaw_deg: 30, motion:
+walk, frame: 20, recipe: file.json, instance: 5, config: {...}}``; every key is optional."""
 from __future__ import annotations
 
+import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
 from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose.instances import first_subject_instance, scene_instances
+from synmitsuba.compose.placement import envelope, frame_boxes, frame_hulls
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.retargeting import retarget
-from synmitsuba.motion.sources import check_motion_source, load_motion
+from synmitsuba.motion.sources import check_motion_source
 from synmitsuba.schema import AnyOf, Nested, Number, Params, Text, Vector, optional, spec
 
 
@@ -25,7 +27,7 @@ class SubjectEntry(Params):
     position: list = spec(factory=lambda: [0.0, 0.0], check=AnyOf((Vector(2), Vector(3)), "give [x, z] (or [x, 0, z]) metres"))
     yaw_deg: float = spec(0.0, Number(-360, 360))
     motion: str = spec("idle", Text(), doc="a procedural kind, a .bvh or an AMASS .npz")
-    frame: int | None = spec(None, optional(Number(0, integer=True)), doc="default: the clip's middle frame")
+    frame: int | None = spec(None, optional(Number(0, integer=True)), doc="clip frame shown first (default: the middle)")
     recipe: str | None = spec(None, optional(Text()), doc="a recipe JSON file instead of a sampled subject")
     instance: int | None = spec(None, optional(Number(1, 2 ** 31 - 1, integer=True)), doc="default: 100 + index")
     config: SubjectConfig | None = spec(None, optional(Nested(SubjectConfig)), doc="what the sampled subject fixes")
@@ -35,6 +37,69 @@ class SubjectEntry(Params):
         check_motion_source(self.motion, base, f"{where}.motion")
         if self.recipe is not None and not os.path.isfile(os.path.join(base, self.recipe)):
             raise ConfigError(f"{where}.recipe", self.recipe, "no such recipe file; paths are relative to the scene file")
+
+
+@dataclass
+class ClipSettings(Params):
+    seconds: float = spec(2.0, Number(0.1, 60), doc="clip length: a random window of a motion file")
+    fps: float = spec(30.0, Number(1, 240), doc="the clip's frame rate (files are resampled)")
+
+
+@dataclass
+class MotionSpec:
+    """Where a subject's clip comes from: a procedural kind drawn with ``seed`` or a random
+    ``seconds`` window (from ``seed``) of a .bvh / AMASS file at ``fps``, relative paths from
+    ``base``; the scene's frame 0 shows clip frame ``start`` (the clip wraps round)."""
+
+    source: str
+    seed: int
+    seconds: float
+    fps: float
+    base: str = ""
+    start: int = 0
+
+    def clip(self, where: str = "motion") -> Motion:
+        from synmitsuba.motion.library import random_window
+        from synmitsuba.motion.sources import load_motion
+        rng = np.random.default_rng(self.seed)
+        m = load_motion(self.source, rng, seconds=self.seconds, base=self.base, field=where)
+        return random_window(m, rng, self.seconds, self.fps)
+
+    def to_dict(self) -> dict:
+        d = {"source": self.source, "seed": int(self.seed), "seconds": float(self.seconds), "fps": float(self.fps),
+             "base": self.base}
+        return {**d, "start": int(self.start)} if self.start else d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "MotionSpec":
+        return cls(d["source"], d["seed"], d["seconds"], d["fps"], d.get("base", ""), d.get("start", 0))
+
+
+@dataclass
+class SubjectSpec:
+    """A subject as data: ``placed_subject`` rebuilds it bit for bit."""
+
+    recipe: SubjectRecipe
+    motion: MotionSpec
+    position: tuple        # (x, z) of the clip's mean root position
+    yaw_deg: float
+    instance: int
+    footprint: np.ndarray  # (4,) whole-clip ground box (x_min, z_min, x_max, z_max)
+    frames: np.ndarray     # (F, 4) per-frame ground boxes
+    height: float          # tallest point over the clip, metres
+    lift: float = 0.0      # metres the clip is raised so its lowest point over the clip is on the ground
+
+    def to_dict(self) -> dict:
+        return {"recipe": json.loads(self.recipe.to_json()), "motion": self.motion.to_dict(),
+                "position": [float(v) for v in self.position], "yaw_deg": float(self.yaw_deg),
+                "instance": int(self.instance), "footprint": self.footprint.tolist(),
+                "frames": self.frames.tolist(), "height": float(self.height), "lift": float(self.lift)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SubjectSpec":
+        return cls(SubjectRecipe.from_dict(d["recipe"]), MotionSpec.from_dict(d["motion"]), tuple(d["position"]),
+                   d["yaw_deg"], d["instance"], np.asarray(d["footprint"], float), np.asarray(d["frames"], float),
+                   d["height"], d["lift"])
 
 
 @dataclass
@@ -63,29 +128,76 @@ def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) ->
     return centred.moved(float(yaw_deg), [pos[0], float(lift), pos[-1]])
 
 
-def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str = "subjects") -> list[PlacedSubject]:
-    """Build, pose and add every subject entry (``SubjectEntry`` or its dict) to ``scene``.
-    Every entry is checked before the first subject is built."""
+def retargeted_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> Motion:
+    from synmitsuba.motion.retargeting import retarget
+    return retarget(motion.clip(where), human.skeleton)
+
+
+def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) -> PlacedSubject:
+    """Subject ``i`` of a scene: built from its recipe (or ``human``, built from it already),
+    its clip retargeted, placed, and started at ``s.motion.start``."""
+    human = build_subject(s.recipe) if human is None else human
+    motion = place_motion(retargeted_clip(human, s.motion, f"subjects[{i}].motion"), s.position, s.yaw_deg, s.lift)
+    if s.motion.start:
+        motion = motion.rolled(s.motion.start)
+    return PlacedSubject(human, motion, 0, s.instance, f"subject{i}")
+
+
+def clip_bounds(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> tuple[list, float, float]:
+    """The per-frame ground hulls of the subject's clip centred on its mean root position, its
+    tallest point over the clip and the lift that puts its lowest point over the clip on the
+    ground (retargeting keeps the source's root height, not the new legs' contact)."""
+    clip = place_motion(retargeted_clip(human, motion, where), (0.0, 0.0), 0.0)
+    xz, height, low = [], -np.inf, np.inf
+    for f in range(clip.n_frames):
+        layers = human.pose(*clip.frame(f), resolve=False)  # a few mm do not change a hull
+        pts = np.concatenate([(lay.points.reshape(-1, 3) if lay.is_curves else lay.vertices) for lay in layers])
+        xz.append(pts[:, [0, 2]])
+        height = max(height, float(pts[:, 1].max()))
+        low = min(low, min(float(lay.vertices[:, 1].min()) for lay in layers if not lay.is_curves))
+    return frame_hulls(xz), height - low, -low
+
+
+def _recipe(e: SubjectEntry, pick: int, base: str) -> SubjectRecipe:
+    if e.recipe is None:
+        return sample_subject(np.random.default_rng(pick), e.config)
+    with open(os.path.join(base, e.recipe)) as fh:
+        return SubjectRecipe.from_json(fh.read())
+
+
+def subject_specs(entries: list, rng: np.random.Generator, taken: set[int], base: str = "",
+                  clip: ClipSettings | None = None, where: str = "subjects") -> tuple[list[SubjectSpec], list]:
+    """Subject entries (``SubjectEntry`` or their dicts) as ``SubjectSpec``s, with the humans
+    built for them. Every entry is checked before the first is built; ``rng`` draws a recipe
+    seed (for entries without one) and a motion seed per entry; ids avoid ``taken``."""
+    clip = clip or ClipSettings()
     parsed = [e if isinstance(e, SubjectEntry) else SubjectEntry.from_dict(e, f"{where}[{i}]") for i, e in enumerate(entries)]
     for i, e in enumerate(parsed):
         e.check_files(f"{where}[{i}]", base)
-    ids = subject_instances(parsed, scene_instances(scene), where)
-    placed = []
+    ids = subject_instances(parsed, taken, where)
+    specs, humans = [], []
     for i, e in enumerate(parsed):
-        pick = i if e.seed is None else e.seed
-        rng = np.random.default_rng([seed, i, pick])
-        if e.recipe is not None:
-            with open(os.path.join(base, e.recipe)) as fh:
-                recipe = SubjectRecipe.from_json(fh.read())
-        else:
-            recipe = sample_subject(np.random.default_rng(pick), e.config)
+        draw, mseed = (int(v) for v in rng.integers(2 ** 31, size=2))
+        recipe = _recipe(e, draw if e.seed is None else e.seed, base)
         human = build_subject(recipe)
-        motion = load_motion(e.motion, rng, seconds=2.0, base=base, field=f"{where}[{i}].motion")
-        motion = place_motion(retarget(motion, human.skeleton), e.position, e.yaw_deg)
-        frame = (motion.n_frames // 2 if e.frame is None else e.frame) % motion.n_frames
-        subject = PlacedSubject(human, motion, frame, ids[i], f"subject{i}")
-        subject.pose_in(scene)
-        placed.append(subject)
+        motion = MotionSpec(e.motion, mseed, clip.seconds, clip.fps, base)
+        hulls, height, lift = clip_bounds(human, motion, f"{where}[{i}].motion")
+        start = (len(hulls) // 2 if e.frame is None else e.frame) % len(hulls)
+        position, yaw = (float(e.position[0]), float(e.position[-1])), float(e.yaw_deg)
+        frames = np.roll(frame_boxes(hulls, yaw, position), -start, 0)
+        specs.append(SubjectSpec(recipe, replace(motion, start=start), position, yaw, ids[i], envelope(frames), frames,
+                                 height, lift))
+        humans.append(human)
+    return specs, humans
+
+
+def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str = "subjects") -> list[PlacedSubject]:
+    """Build, place and pose every subject entry (``SubjectEntry`` or its dict) in ``scene``,
+    each at its first frame; every entry is checked before the first subject is built."""
+    specs, humans = subject_specs(entries, np.random.default_rng(seed), scene_instances(scene), base, where=where)
+    placed = [placed_subject(s, i, h) for i, (s, h) in enumerate(zip(specs, humans))]
+    for p in placed:
+        p.pose_in(scene)
     return placed
 
 

@@ -13,7 +13,7 @@ from synmitsuba.compose.composition import ComposeConfig
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.errors import ConfigError
 from synmitsuba.resources import config_names, find_config
-from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, optional, read_yaml, spec
+from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, Text, optional, read_yaml, spec
 
 
 @dataclass
@@ -35,6 +35,8 @@ class GenerateConfig(Params):
                      doc="rendered: flow to the previous/next rendered frame (f -/+ stride); adjacent: to clip frames f -/+ 1")
     render: RenderOptions = spec(factory=RenderOptions, check=Nested(RenderOptions))
     compose: ComposeConfig = spec(factory=ComposeConfig, check=Nested(ComposeConfig))
+    scene: str | None = spec(None, optional(Text()), doc="a scene file whose objects, lights, cameras and subjects every "
+                             "sequence uses instead of a composed scene (relative to the config file); compose is unused")
     smplx: SMPLXOptions = spec(factory=SMPLXOptions, check=Nested(SMPLXOptions),
                                doc="SMPL-X / SMPL fits of every subject (needs the user's model files)")
 
@@ -61,6 +63,8 @@ def load_generate_config(path: str, overrides=()) -> GenerateConfig:
     if not os.path.isfile(path):
         raise ConfigError("config file", path, f"no such file; give a path or a shipped config: {', '.join(config_names())}")
     data = read_yaml(path, "config file", "sequences, render, compose, ...")
+    if isinstance(data.get("scene"), str):
+        data["scene"] = os.path.join(os.path.dirname(os.path.abspath(path)), data["scene"])
     for assignment in overrides:
         _override(data, assignment)
     compose = data.setdefault("compose", {})

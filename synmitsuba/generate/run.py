@@ -17,54 +17,71 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable
 
-import numpy as np
-
 from synmitsuba.errors import ConfigError
 from synmitsuba.generate.config import GenerateConfig
 from synmitsuba.generate.executors import EXECUTORS, Failure
+from synmitsuba.seeds import render_seed, sequence_rng
 
 
-def sequence_rng(seed: int, index: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence([int(seed), int(index)]))
-
-
-def run_sequence(config: dict, index: int, out: str) -> dict:
-    """Compose, render and write sequence ``index`` (a task; ``config`` as a plain dict so it
-    crosses process boundaries). Returns the sequence's manifest entry."""
+def sequence_spec(cfg: GenerateConfig, index: int):
+    """Sequence ``index``'s scene as a ``SceneSpec``: the config's scene file, or a composed
+    scene; every draw from ``sequence_rng(cfg.seed, index)``."""
+    rng = sequence_rng(cfg.seed, index)
+    if cfg.scene is not None:
+        from synmitsuba.compose.scenefile import scene_spec
+        return scene_spec(cfg.scene, cfg.scene, rng, seed=cfg.seed)
     from synmitsuba.compose.composition import compose_scene
+    return compose_scene(cfg.compose, rng, seed=cfg.seed)
+
+
+def sequence_frames(cfg: GenerateConfig, n_frames: int) -> list[int]:
+    """The clip frames a sequence renders: every ``stride``-th, at most ``frames`` of them."""
+    frames = list(range(0, n_frames, cfg.stride))
+    return frames if cfg.frames is None else frames[:cfg.frames]
+
+
+def write_sequence(spec, cfg: GenerateConfig, index: int, folder: str, bar=None) -> list[str]:
+    """Render and label ``spec``'s frames as ``cfg`` says, writing ``scene.json`` and
+    ``fFFFF_<view>`` samples into ``folder``; returns the sample stems."""
     from synmitsuba.engine.build import release_memory
     from synmitsuba.io.exr import write_sample
     from synmitsuba.pipeline import render_sequence
+    with open(os.path.join(folder, "scene.json"), "w") as fh:
+        fh.write(spec.to_json(indent=1))
+    r, stems = cfg.render, []
+    try:
+        for f, view, sample in render_sequence(spec, frames=sequence_frames(cfg, spec.n_frames), spp=r.spp,
+                                               seed=render_seed(cfg.seed, index), annotate=cfg.annotate,
+                                               body_models=cfg.smplx, flow="rendered" if cfg.flow == "rendered" else 1,
+                                               max_depth=r.max_depth, sampler=r.sampler, denoise=r.denoise):
+            sample.meta.update(sequence=index)
+            stem = f"f{f:04d}_{view}"
+            write_sample(sample, os.path.join(folder, stem))
+            stems.append(stem)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        release_memory()  # this sequence's kernels and buffers: the next one has other BSDFs
+    return stems
+
+
+def run_sequence(config: dict, index: int, out: str) -> dict:
+    """Compose (or read), render and write sequence ``index``: the one task of a generation
+    (``config`` as a plain dict so it crosses process boundaries). Returns the sequence's
+    manifest entry."""
     cfg = GenerateConfig.from_dict(config, "")
     name = f"seq_{index:06d}"
     final, partial = os.path.join(out, name), os.path.join(out, f"{name}.partial")
     shutil.rmtree(partial, ignore_errors=True)
     os.makedirs(partial)
     t0 = time.perf_counter()
-    spec = compose_scene(cfg.compose, sequence_rng(cfg.seed, index), seed=cfg.seed)
-    with open(os.path.join(partial, "scene.json"), "w") as fh:
-        fh.write(spec.to_json(indent=1))
-    count = spec.n_frames if cfg.frames is None else min(cfg.frames, -(-spec.n_frames // cfg.stride))
-    frames = list(range(0, spec.n_frames, cfg.stride))[:count]
-    render_seed = int(np.random.SeedSequence([cfg.seed, index, 1]).generate_state(1)[0] % 2 ** 30)
-    stems = []
-    r = cfg.render
-    try:
-        for f, view, sample in render_sequence(spec, frames=frames, spp=r.spp, seed=render_seed,
-                                               annotate=cfg.annotate, body_models=cfg.smplx,
-                                               flow="rendered" if cfg.flow == "rendered" else 1, max_depth=r.max_depth,
-                                               sampler=r.sampler, denoise=r.denoise):
-            sample.meta.update(sequence=index)
-            stem = f"f{f:04d}_{view}"
-            write_sample(sample, os.path.join(partial, stem))
-            stems.append(stem)
-    finally:
-        release_memory()  # this sequence's kernels and buffers: the next one has other BSDFs
+    spec = sequence_spec(cfg, index)
+    stems = write_sequence(spec, cfg, index, partial)
     shutil.rmtree(final, ignore_errors=True)
     os.replace(partial, final)
     import resource
-    return {"sequence": index, "folder": name, "samples": stems, "frames": len(frames), "views": len(spec.views),
-            "subjects": len(spec.subjects), "environment": spec.environment,
+    return {"sequence": index, "folder": name, "samples": stems, "frames": len(sequence_frames(cfg, spec.n_frames)),
+            "views": len(spec.views), "subjects": len(spec.subjects), "environment": spec.environment,
             "seconds": round(time.perf_counter() - t0, 3), "pid": os.getpid(),
             "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1), "rss_mb": _rss_mb()}
 
@@ -154,6 +171,9 @@ def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str =
     if executor not in EXECUTORS:
         raise ConfigError("--executor", executor, f"use one of {', '.join(EXECUTORS)}")
     out = check_output(out)
+    if config.scene is not None:
+        from synmitsuba.compose.scenefile import check_scene_file
+        check_scene_file(config.scene, "scene")
     for name in os.listdir(out):
         if name.endswith(".partial"):
             shutil.rmtree(os.path.join(out, name), ignore_errors=True)

@@ -63,27 +63,24 @@ class MotionLibrary:
 
     def add_folder(self, folder: str) -> int:
         from synmitsuba.motion.bvh import load_bvh
+        from synmitsuba.motion.sources import motion_files
         if not os.path.isdir(folder):
             raise ConfigError("motion folder", folder, "no such folder")
         labels_file = os.path.join(folder, "labels.json")
         given = json.load(open(labels_file)) if os.path.isfile(labels_file) else {}
         added = 0
-        for root, _, files in os.walk(folder):
-            for f in sorted(files):
-                path = os.path.join(root, f)
-                stem = os.path.splitext(f)[0]
-                labels = tuple(given.get(f, given.get(stem, [stem.replace("_", " ")])))
-                if f.lower().endswith(".bvh"):
-                    seconds = load_bvh(path).duration
-                    self.entries.append(LibraryEntry(stem, "bvh", path, labels, seconds))
-                elif f.lower().endswith(".npz"):
-                    with np.load(path) as d:
-                        fps = float(d["mocap_frame_rate"]) if "mocap_frame_rate" in d else 120.0
-                        seconds = len(d["trans"]) / fps
-                    self.entries.append(LibraryEntry(stem, "amass", path, labels, seconds))
-                else:
-                    continue
-                added += 1
+        for path in motion_files(folder):
+            f = os.path.basename(path)
+            stem = os.path.splitext(f)[0]
+            labels = tuple(given.get(f, given.get(stem, [stem.replace("_", " ")])))
+            if f.lower().endswith(".bvh"):
+                self.entries.append(LibraryEntry(stem, "bvh", path, labels, load_bvh(path).duration))
+            else:
+                with np.load(path) as d:
+                    fps = float(d["mocap_frame_rate"]) if "mocap_frame_rate" in d else 120.0
+                    seconds = len(d["trans"]) / fps
+                self.entries.append(LibraryEntry(stem, "amass", path, labels, seconds))
+            added += 1
         return added
 
     def filter(self, min_seconds: float = CLIP_SECONDS, excluded=EXCLUDED_LABELS) -> "MotionLibrary":

@@ -86,6 +86,11 @@ class Motion:
         root = (rest + self.root_translation) @ Ry.T - rest + np.asarray(translation, dtype=np.float64)
         return replace(self, rotations=rot, root_translation=root)
 
+    def rolled(self, start: int) -> "Motion":
+        """The clip started at frame ``start`` and wrapped round (frame 0 is old frame ``start``)."""
+        k = int(start) % self.n_frames
+        return replace(self, rotations=np.roll(self.rotations, -k, 0), root_translation=np.roll(self.root_translation, -k, 0))
+
     def frame(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """(rotations (J, 3, 3), root_translation (3,)) of frame i."""
         return self.rotations[i], self.root_translation[i]

@@ -23,6 +23,16 @@ def motion_source_kind(source: str) -> str:
     raise ConfigError("motion", source, f"give a .bvh or AMASS .npz file or one of {', '.join(KINDS)}")
 
 
+MOTION_SUFFIXES = (".bvh", ".npz")
+
+
+def motion_files(folder: str) -> list[str]:
+    """Every .bvh / .npz file under ``folder`` (subfolders too), sorted by path: the same list
+    on every machine and file system."""
+    return sorted(os.path.join(root, f) for root, _, files in os.walk(folder) for f in files
+                  if f.lower().endswith(MOTION_SUFFIXES))
+
+
 def check_motion_source(source: str, base: str = "", field: str = "motion") -> tuple[str, str]:
     """(kind, path) of a motion source, or a ConfigError naming ``field`` for an unknown kind
     or a missing file (relative paths are taken from ``base``); cheap, so callers check every
