@@ -45,8 +45,9 @@ bench-cycles: setup   # Blender Cycles (bpy from PyPI, in its own environment) a
 	test -x .bpy/bin/python || ($(PYTHON) -m venv .bpy && .bpy/bin/pip install -q bpy)
 	$(PY) bench/render_quality.py --bpy .bpy/bin/python --images out/bench
 
-lint: setup
+lint: setup   # ruff, and mypy over the package (settings in pyproject.toml)
 	$(VENV)/bin/ruff check synmitsuba tests bench
+	$(VENV)/bin/mypy
 
 test: setup lint
 	$(PY) -m pytest -q

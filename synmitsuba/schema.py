@@ -69,7 +69,7 @@ class Choice(Check):
     """One of ``options``: a tuple, or a registry dict read at check time (so kinds added to
     the registry later are accepted)."""
 
-    options: object
+    options: Any  # a tuple or a registry dict
 
     def __call__(self, where: str, value):
         if value not in self.options:
@@ -91,7 +91,7 @@ class Vector(Check):
         ok = arr.shape == (self.n,) and all(_is_number(x) and math.isfinite(float(x)) for x in arr)
         if ok:
             arr = arr.astype(np.float64)
-            ok = (self.low is None or (arr >= self.low).all()) and (self.high is None or (arr <= self.high).all())
+            ok = bool((self.low is None or (arr >= self.low).all()) and (self.high is None or (arr <= self.high).all()))
         if not ok:
             rng = f" in [{self.low}, {self.high}]" if self.low is not None and self.high is not None else ""
             raise ConfigError(where, value, f"give {self.n} numbers{rng}" + (f" ({self.what})" if self.what else ""))
@@ -254,7 +254,7 @@ class Params:
         return from_dict(cls, data, where)
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        return dataclasses.asdict(self)  # type: ignore[call-overload]  # every Params is a dataclass
 
 
 def read_yaml(path, what: str, keys: str) -> dict:

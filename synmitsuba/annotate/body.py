@@ -46,7 +46,7 @@ class BodyLayer:
         far = max((far_side(b, cam.center) for b in self.bodies), default=0.0)
         hits = hits_through(scene, cam.center, d[shown], by_name, far)
         own = (hits["instance"] > 0) & (hits["instance"] == instance.reshape(-1)[shown])  # this body's subject shows
-        out = {"body_part": np.zeros(H * W, np.uint8), "body_face": np.zeros(H * W, np.int32),
+        out: dict[str, np.ndarray] = {"body_part": np.zeros(H * W, np.uint8), "body_face": np.zeros(H * W, np.int32),
                "body_bary": np.zeros((H * W, 2), np.float32), "body_depth": np.zeros(H * W, np.float32),
                "body_normal": np.zeros((H * W, 3), np.float32)}
         for idx in np.unique(hits["shape"][own]):

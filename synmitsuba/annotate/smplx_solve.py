@@ -63,7 +63,10 @@ def _anny_targets(body, rotations, roots) -> _Targets:
     for R, t in zip(rotations, roots):
         v = skin(body.vertices, body.weights, bone_transforms(sk, R, t))
         G, P = forward_kinematics(sk, R, t)
-        verts.append(v), normals.append(vertex_normals(v, body.faces)), heads.append(P), glob.append(G)
+        verts.append(v)
+        normals.append(vertex_normals(v, body.faces))
+        heads.append(P)
+        glob.append(G)
     return _Targets(np.array(verts), np.array(normals), body.faces, np.array(heads), np.array(glob))
 
 
@@ -127,7 +130,9 @@ class _Problem:
             v = v[self.subset]
             ia = self.trees[f].query(v, workers=-1)[1]
             im = cKDTree(v).query(self.t.vertices[f], workers=-1)[1]
-            to_a.append(ia), to_m.append(im), nm.append(n[im])
+            to_a.append(ia)
+            to_m.append(im)
+            nm.append(n[im])
             w_a.append((n * self.t.normals[f][ia]).sum(1) > 0.3)
             w_m.append((n[im] * self.t.normals[f]).sum(1) > 0.3)
         self.to_a, self.to_m = torch.as_tensor(np.array(to_a)), torch.as_tensor(np.array(to_m))
@@ -296,6 +301,7 @@ def fit_frames(shape: Shape, body, clip, frames: np.ndarray, s: FitSettings) -> 
         surf.append(d)
         joints = joints.numpy().astype(np.float64)
         jerr.append(1000 * np.mean([np.linalg.norm(joints[:, j] - jt[j], axis=-1) for j in idx], 0))
-        poses.append(pose), transls.append(transl)
-    surf = np.concatenate(surf)
-    return FrameFit(np.concatenate(poses), np.concatenate(transls), J0, surf.mean(1), surf.max(1), np.concatenate(jerr))
+        poses.append(pose)
+        transls.append(transl)
+    mm = np.concatenate(surf)
+    return FrameFit(np.concatenate(poses), np.concatenate(transls), J0, mm.mean(1), mm.max(1), np.concatenate(jerr))

@@ -111,8 +111,8 @@ def _cap(p: AccessoryParams, body, head):
     used, f = submesh(body.faces, head["mask"])
     n = vertex_normals(body.vertices, body.faces)[used] @ R
     f, dome = cut(f, _cap_line(head, v[used]), v[used] + n * 0.009)
-    dome = trimesh.Trimesh(dome, f, process=False).subdivide_loop(1)  # the body's head is too coarse for a shiny crown
-    dome, f = np.asarray(dome.vertices), np.asarray(dome.faces)
+    fine = trimesh.Trimesh(dome, f, process=False).subdivide_loop(1)  # the body's head is too coarse for a shiny crown
+    dome, f = np.asarray(fine.vertices), np.asarray(fine.faces)
     bill = _bill(v[head["mask"]], ((head["eyes"] - c) @ R).mean(0)[1] + 0.03, p.scale)
     return np.concatenate([dome, bill[0]]) @ R.T + c, np.concatenate([f, bill[1] + len(dome)])
 
@@ -296,7 +296,7 @@ def _fill(grid: np.ndarray) -> np.ndarray:
 
 def _concave(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """The upper concave envelope of y(x) (x ascending) at x: the line cloth stretched over it takes."""
-    hull = []  # upper hull by the monotone chain
+    hull: list = []  # upper hull by the monotone chain
     for j in range(len(x)):
         while len(hull) >= 2 and ((x[hull[-1]] - x[hull[-2]]) * (y[j] - y[hull[-2]])
                                   - (y[hull[-1]] - y[hull[-2]]) * (x[j] - x[hull[-2]])) >= 0:

@@ -13,6 +13,7 @@ import functools
 import os
 import sys
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -207,7 +208,7 @@ def shape_calibration() -> dict:
     anchors, beta anchors)}, "age": (anny age anchors, years anchors)}`` for conditional Beta
     distributions of each phenotype given anny's age."""
     import torch
-    out = {}
+    out: dict[str, Any] = {}
     for sex, name in (("male", "boys"), ("female", "girls")):
         state = torch.load(os.path.join(anny_root(), "data", "shape_calibration", f"{name}.pth"), weights_only=True,
                            map_location="cpu")
@@ -254,7 +255,7 @@ def _uv_masks_8bit(size: int) -> dict[str, np.ndarray]:
     for key, name in files.items():
         path = os.path.join(folder, name)
         if os.path.isfile(path):
-            out[key] = np.asarray(Image.open(path).convert("L").resize((size, size), Image.BILINEAR))
+            out[key] = np.asarray(Image.open(path).convert("L").resize((size, size), Image.Resampling.BILINEAR))
             out[key].flags.writeable = False
     return out
 

@@ -24,7 +24,9 @@ test costs ~10 us a vertex, so it goes only where it can matter.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -100,7 +102,7 @@ class Surface:
 
     vertices: np.ndarray
     normals: np.ndarray
-    tree: object
+    tree: Any
     faces: np.ndarray | None = None
     around: np.ndarray | None = None  # binding.incident_faces, for ``clearance``
     lift: np.ndarray | None = None  # (V,) metres the surface stands over each vertex (``lifted``)
@@ -153,7 +155,7 @@ class Surface:
         vertex normals read a point inside an arm as outside the chest beside it)."""
         from synmitsuba.body.binding import closest_on_faces, local_pseudonormals
         c, face, bary = closest_on_faces(self.vertices, self.faces, points,
-                                         self.around[near].reshape(len(points), -1))
+                                         np.asarray(self.around)[near].reshape(len(points), -1))
         n = local_pseudonormals(self.vertices, self.faces, self.around, face, bary)
         d = points - c
         dist = np.linalg.norm(d, axis=1)
@@ -187,7 +189,7 @@ class GarmentCollider:
         self.incidence = incidence(np.asarray(faces), n_vertices)
         self.bound_vertices, self.barycentric = np.asarray(bound_vertices), np.asarray(barycentric)
 
-    def resolve(self, points: np.ndarray, body: Surface, inner: list[Surface] = (), calibrate: bool = False):
+    def resolve(self, points: np.ndarray, body: Surface, inner: Sequence[Surface] = (), calibrate: bool = False):
         """``points`` pushed out of ``body`` by the margin and out of each ``inner`` garment by
         ``LAYER_MARGIN``; returns new points (the input is not changed). No vertex is asked for
         more clearance than it had at rest: ``calibrate`` (on the rest pose, once) records each
@@ -197,7 +199,7 @@ class GarmentCollider:
         doubt = np.zeros(len(out), bool)  # under a tangent plane of the body, whatever the exact test read
         checks = [(lambda p: self._over_bound_point(p, body), self.margin),
                   (lambda p: body.clearance(p, self.margin + EXACT_BAND, under=doubt), self.margin)]
-        checks += [(lambda p, s=s: s.depth(p, REACH), LAYER_MARGIN) for s in inner]
+        checks += [(functools.partial(s.depth, reach=REACH), LAYER_MARGIN) for s in inner]
         if calibrate:
             self.floors = []
         carried = np.zeros(len(out), bool)  # moved by something other than their own body clearance

@@ -233,7 +233,7 @@ def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
     """Each shoe is the convex hull of its foot (and ankle, by ``length``), grown by ``offset``
     and subdivided; a convex shell cannot cut into the toes. UVs by cylindrical projection."""
     import trimesh
-    keep = GARMENTS["shoes"].region(g, r, body.vertices)
+    keep = _region(GARMENTS["shoes"])(g, r, body.vertices)
     parts = []
     for side in (1, -1):
         pts = body.vertices[keep & (np.sign(body.vertices[:, 0]) == side)]
@@ -288,6 +288,48 @@ def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
     return max(GARMENTS[g.kind].offset + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
 
 
+def _region(kind: GarmentKind) -> Callable:
+    if kind.region is None:
+        raise ValueError(f"a {kind.shape} garment kind needs a region")
+    return kind.region
+
+
+def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+    """The body region ``cut`` covers, offset from the body; tops and dresses draped."""
+    kind = GARMENTS[g.kind]
+    v, f, uv = _cut_shell(body, r, split, _region(kind)(cut, r, body.vertices), offset)
+    v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
+    if kind.layer in (Layer.TOP, Layer.DRESS):
+        slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
+        v = drape(v, f, _over_torso(body, r, v), slope)
+    return v, f, uv
+
+
+def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+    """A bodice (a shell) and a skirt flaring from the hips."""
+    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
+    sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
+    return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
+
+
+@dataclass(frozen=True)
+class GarmentShape:
+    """How a garment kind's rest mesh is made: ``build(body, regions, split, params, cut params,
+    offset) -> (vertices, faces, uv)``; ``hemmed``: its open edges get a hem (a closed hull has none)."""
+
+    build: Callable
+    hemmed: bool = True
+
+
+# A new garment shape is one entry here; GarmentKind.shape names one.
+GARMENT_SHAPES: dict[str, GarmentShape] = {
+    "shell": GarmentShape(_shell_shape),
+    "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y)),
+    "shell+flare": GarmentShape(_dress_shape),
+    "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
+}
+
+
 def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0,
                   tuck: bool = False) -> GarmentMesh:
     """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology.
@@ -298,22 +340,9 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     shape = g
     if tuck and kind.layer == Layer.TOP:
         shape = dataclasses.replace(g, length=min(g.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
-    if kind.shape == "flare":
-        v, f, uv = _flare(body, r, g, offset, r.waist_y)
-    elif kind.shape == "hull":
-        v, f, uv = _shoes(body, r, g, offset)
-    else:
-        v, f, uv = _cut_shell(body, r, split, kind.region(shape, r, body.vertices), offset)
-        v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
-        if kind.layer in (Layer.TOP, Layer.DRESS):
-            slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
-            v = drape(v, f, _over_torso(body, r, v), slope)
-        if kind.shape == "shell+flare":
-            sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
-            f = np.concatenate([f, sf + len(v)])
-            v, uv = np.concatenate([v, sv]), np.concatenate([uv, suv])
+    v, f, uv = GARMENT_SHAPES[kind.shape].build(body, r, split, g, shape, offset)
     n_faces, n_vertices = len(f), len(v)
-    if kind.shape != "hull":
+    if GARMENT_SHAPES[kind.shape].hemmed:
         v, f, uv = hem(body, v, f, uv, g.thickness)
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))

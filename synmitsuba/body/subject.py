@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -34,11 +35,11 @@ class PosedLayer:
     name: str
     layer: int
     material: Material
-    vertices: np.ndarray | None = None
-    faces: np.ndarray | None = None
-    uv: np.ndarray | None = None
-    points: np.ndarray | None = None
-    radius: np.ndarray | None = None
+    vertices: Any = None  # (V, 3) for a mesh, None for curves
+    faces: Any = None     # (F, 3)
+    uv: Any = None        # (V, 2) or None
+    points: Any = None    # (N, K, 3) for curves, None for a mesh
+    radius: Any = None
 
     @property
     def is_curves(self) -> bool:
@@ -52,7 +53,7 @@ class _Part:
     material: Material
     rest: np.ndarray
     faces: np.ndarray
-    uv: np.ndarray
+    uv: np.ndarray | None
     weights: np.ndarray
     collider: GarmentCollider | None = None  # garments: pushed out of the posed body each frame
     inner: bool = False                      # a garment that a later garment is pushed out of
@@ -202,6 +203,7 @@ class LayeredHuman:
         if not len(self.hair):
             return
         body, mat = self.body, self.parts[0].material
+        assert mat.texture is not None  # the body is always textured
         head = np.flatnonzero(self.head["mask"])
         cover = np.zeros(len(body.vertices))
         beard = self.hair.region == 5
@@ -279,7 +281,7 @@ class LayeredHuman:
         returns the posed body's surface."""
         body = np.empty_like(self.body.vertices)
         body[self.split.source] = layers[0].vertices
-        surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), []
+        surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), list[Surface]()
         for part, layer in zip(self.parts, layers):
             if part.collider is None:
                 continue

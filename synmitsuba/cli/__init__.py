@@ -14,6 +14,7 @@ import signal
 import sys
 import threading
 import warnings
+from typing import Callable
 
 # Modules providing commands, in the order they appear in --help. A module that fails to
 # import (an optional extra missing) does not take the whole CLI down.
@@ -62,7 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _exit_on_interrupt(prog: str) -> None:
+def _exit_on_interrupt(prog: str) -> Callable[[], None]:
     """Ctrl-C: remove the temporaries being written, say so on one line, exit 130 at once.
 
     A KeyboardInterrupt raised inside drjit (our Python sensor runs while a kernel is traced)
@@ -85,7 +86,7 @@ def _exit_on_interrupt(prog: str) -> None:
     return restore
 
 
-def _one_line_warnings(prog: str) -> None:
+def _one_line_warnings(prog: str) -> Callable:
     def show(message, category, filename, lineno, file=None, line=None):
         print(f"{prog}: warning: {message}", file=sys.stderr)
     previous, warnings.showwarning = warnings.showwarning, show

@@ -146,7 +146,7 @@ def inside_boxes(points: np.ndarray, boxes: np.ndarray, margin: float = 0.1) -> 
         return np.zeros(len(points), bool)
     lo, hi = boxes[None, :, :3] - margin, boxes[None, :, 3:] + margin
     p = points[:, None, :]
-    return ((p >= lo) & (p <= hi)).all(-1).any(1)
+    return np.asarray(((p >= lo) & (p <= hi)).all(-1), bool).any(1)  # type: ignore[return-value]  # numpy's stubs
 
 
 def bounds_ok(traj: Trajectory, group: Group, object_boxes: np.ndarray, cfg: CameraConfig) -> bool:

@@ -23,7 +23,7 @@ from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text
 
 @dataclass
 class SubjectsConfig(Params):
-    count: object = spec(2, AnyOf((Number(1, 32, integer=True), Range(1, 32)), "give a count or [min, max] in 1..32"))
+    count: int | list = spec(2, AnyOf((Number(1, 32, integer=True), Range(1, 32)), "give a count or [min, max] in 1..32"))
     motions: list = spec(factory=lambda: ["walk", "idle", "wave", "jog", "side_step", "gesture"],
                          check=ListOf(Text(), 1), doc="procedural kinds, .bvh/.npz files or folders of them")
     seconds: float = spec(2.0, Number(0.1, 60), doc="clip length")

@@ -156,7 +156,7 @@ def sample_lighting(env: Environment, rng: np.random.Generator) -> dict:
         el, az = np.radians(rng.uniform(*lit.sun_elevation_deg)), np.radians(rng.uniform(*lit.sun_azimuth_deg))
         direction = [float(np.cos(el) * np.sin(az)), float(np.sin(el)), float(np.cos(el) * np.cos(az))]
         return {"type": "sunsky", "sun_direction": direction, "turbidity": float(rng.uniform(*lit.turbidity))}
-    return {"type": "envmap", "file": os.path.relpath(os.path.join(os.path.dirname(env.path), lit.file), SCENES_DIR),
+    return {"type": "envmap", "file": os.path.relpath(os.path.join(os.path.dirname(env.path), str(lit.file)), SCENES_DIR),
             "scale": float(rng.uniform(*lit.scale)), "rotation_deg": float(rng.uniform(*lit.rotation_deg))}
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, fields
+from typing import Any
 
 import numpy as np
 
@@ -168,7 +169,7 @@ def _mesh(obj: ObjectSpec, where: str, base: str):
         path = os.path.join(base, obj.mesh)
         if not os.path.isfile(path):
             raise ConfigError(f"{where}.mesh", obj.mesh, f"file not found ({path}); paths are relative to the scene file")
-        mesh = trimesh.load(path, force="mesh", process=False)
+        mesh: Any = trimesh.load(path, force="mesh", process=False)
         if len(mesh.faces) == 0:
             raise ConfigError(f"{where}.mesh", obj.mesh, "the file holds no triangles")
         return mesh

@@ -41,7 +41,7 @@ class _Base:
             raise ConfigError("crop", crop, "use None (whole images) or 'person' (one crop per subject)")
         self.stems = list_samples(root)
         self.modalities, self.crop, self.size = modalities, crop, int(size)
-        self.index = []  # (stem, subject row) per item
+        self.index: list[tuple[str, int | None]] = []  # (stem, subject row) per item
         counts = []
         for stem in self.stems:
             with open(f"{stem}.json") as fh:

@@ -31,7 +31,8 @@ def dataset_stats(root: str) -> dict:
     if not stems:
         raise ConfigError("dataset", root, "no complete samples here; give a folder `synmitsuba generate` wrote")
     scenes = _scenes(root)
-    vis_frac, vis_classes, dist, pitch, frames = [], collections.Counter(), [], [], set()
+    vis_frac, dist, pitch, frames = [], [], [], set()
+    vis_classes: collections.Counter = collections.Counter()
     for stem in stems:
         with open(f"{stem}.json") as fh:
             side = json.load(fh)

@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 import copy
+from typing import Callable
 
 from synmitsuba.body.textures import linear_rgb_to_lab
 
 # variable -> (texture field, conversion)
-_FIELDS = {"base_rgb": ("base_lab", linear_rgb_to_lab), "pattern_rgb": ("pattern_lab", linear_rgb_to_lab),
+_FIELDS: dict[str, tuple[str, Callable]] = {
+           "base_rgb": ("base_lab", linear_rgb_to_lab), "pattern_rgb": ("pattern_lab", linear_rgb_to_lab),
            "decal_rgb": ("decal_lab", linear_rgb_to_lab), "pattern_scale": ("pattern_scale", float),
            "pattern_width": ("pattern_width", float), "pattern_alpha": ("pattern_alpha", float),
            "phase": ("uv_offset", list), "decal_center": ("decal_center", list), "decal_size": ("decal_size", float)}

@@ -109,7 +109,7 @@ class DiffScene:
             for name, value in zip(SUN, start):
                 self._add(name, ENVIRONMENT[name], mi.Float(value))
         elif isinstance(env, Constant):
-            self._add("environment.radiance", ENVIRONMENT["environment.radiance"], mi.Color3f(*env.radiance))
+            self._add("environment.radiance", ENVIRONMENT["environment.radiance"], mi.Color3f(*env.radiance))  # type: ignore[misc]
         elif isinstance(env, EnvMap):
             self._envmap = type(self.params["environment.data"])(self.params["environment.data"])
             self._add("environment.intensity", ENVIRONMENT["environment.intensity"], mi.Float(1.0))

@@ -65,8 +65,8 @@ class SoftSun:
         self.kappa = float(1.0 / np.radians(self.sigma) ** 2)
         self.height, self.width = width // 2, width
         self.elevation, self.azimuth = sun_angles(env.sun_direction)
-        full = mi.load_dict(environment_dict(env))
-        sky = mi.load_dict(environment_dict(dataclasses.replace(env, sun_scale=0.0)))
+        full = mi.load_dict(environment_dict(env))  # type: ignore[arg-type]  # a SunSky: never None
+        sky = mi.load_dict(environment_dict(dataclasses.replace(env, sun_scale=0.0)))  # type: ignore[arg-type]
         dirs = texel_directions(self.height, self.width)
         self.sky = _evaluate(sky, dirs.reshape(-1, 3)).reshape(*dirs.shape[:2], 3).astype(np.float32)
         self.irradiance = self._sun_irradiance(full, sky, np.asarray(env.sun_direction, dtype=np.float64))

@@ -117,7 +117,7 @@ class ProceduralTexture:
         img = values["base_rgb"] * (1.0 - m) + values["pattern_rgb"] * m
         d = dr.clip(self._decal(values), 0.0, 1.0) * values["decal_alpha"]
         img = img * (1.0 - d) + values["decal_rgb"] * d
-        return mi.TensorXf(dr.ravel(img), shape=(self.size, self.size, 3))
+        return mi.TensorXf(dr.ravel(img), shape=(self.size, self.size, 3))  # type: ignore[call-overload]
 
     def _pattern(self, values):
         import drjit as dr

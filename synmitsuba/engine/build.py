@@ -12,6 +12,7 @@ import time
 import tempfile
 import weakref
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +32,7 @@ def _bitmap(arr: np.ndarray) -> dict:
 
 def bsdf_dict(mat: Material) -> dict:
     """Mitsuba BSDF dict for a Material."""
-    color = _bitmap(mat.texture) if mat.texture is not None else {"type": "rgb", "value": list(mat.base_color)}
+    color = _bitmap(mat.texture) if mat.texture is not None else {"type": "rgb", "value": _rgb_list(mat.base_color)}
     if mat.kind == "hair":
         rough = {"longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3}
         if mat.strand_melanin is None:
@@ -42,8 +43,8 @@ def bsdf_dict(mat: Material) -> dict:
         sigma = hair_sigma_a(mat.strand_melanin, mat.redness)[:, None, :]
         return {"type": "hair", "sigma_a": {**_bitmap(sigma), "filter_type": "nearest", "wrap_mode": "clamp"}, **rough}
     if mat.kind == "principled":
-        rough = _bitmap(mat.roughness_map) if mat.roughness_map is not None else mat.roughness
-        bsdf = {"type": "principled", "base_color": color, "roughness": rough,
+        roughness: Any = _bitmap(mat.roughness_map) if mat.roughness_map is not None else mat.roughness
+        bsdf = {"type": "principled", "base_color": color, "roughness": roughness,
                 "metallic": mat.metallic, "specular": mat.specular}
     else:
         bsdf = {"type": "diffuse", "reflectance": color}
@@ -117,13 +118,18 @@ def aligned_floats(arr: np.ndarray, align: int = 64):
     return mi.Float(out)
 
 
+def _rgb_list(value) -> list[float]:
+    """A colour field (a grey value or RGB; materials store RGB tuples) as Mitsuba's rgb value."""
+    return [float(c) for c in np.broadcast_to(np.asarray(value, np.float64), (3,))]
+
+
 def environment_dict(env) -> dict | None:
     """The Mitsuba emitter dict of a Constant, SunSky or EnvMap (None: no environment)."""
     import mitsuba as mi
     if env is None:
         return None
     if isinstance(env, Constant):
-        return {"type": "constant", "radiance": {"type": "rgb", "value": list(env.radiance)}}
+        return {"type": "constant", "radiance": {"type": "rgb", "value": _rgb_list((env.radiance))}}
     if isinstance(env, SunSky):
         # Mitsuba's sky model is z-up in its local frame; sun_direction is taken in world space.
         return {"type": "sunsky", "sun_direction": list(env.sun_direction), "turbidity": env.turbidity,
@@ -139,10 +145,10 @@ def _light(light) -> dict:
     import mitsuba as mi
     if isinstance(light, PointLight):
         return {"type": "point", "position": list(light.position),
-                "intensity": {"type": "rgb", "value": list(light.intensity)}}
+                "intensity": {"type": "rgb", "value": _rgb_list((light.intensity))}}
     if isinstance(light, DirectionalLight):
         return {"type": "directional", "direction": list(light.direction),
-                "irradiance": {"type": "rgb", "value": list(light.irradiance)}}
+                "irradiance": {"type": "rgb", "value": _rgb_list((light.irradiance))}}
     if isinstance(light, AreaLight):  # Mitsuba's rectangle spans [-1, 1]^2 in xy and faces +z
         facing = np.subtract(light.target, light.position)
         try:
@@ -152,7 +158,7 @@ def _light(light) -> dict:
         M = np.eye(4)
         M[:3, :3], M[:3, 3] = F @ np.diag([light.size[0] / 2, light.size[1] / 2, 1.0]), light.position
         return {"type": "rectangle", "to_world": mi.ScalarTransform4f(M.tolist()),
-                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": list(light.radiance)}},
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": _rgb_list((light.radiance))}},
                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}}}
     raise TypeError(light)
 
@@ -182,7 +188,7 @@ def direct_light(emitter_dict: dict, at, n: int = 32) -> float:
     su, sv = np.meshgrid(u, u)
     it = dr.zeros(mi.Interaction3f, n * n)
     it.p = mi.Point3f(*(float(x) for x in at))
-    ds, weight = emitter.sample_direction(it, mi.Point2f(mi.Float(su.ravel()), mi.Float(sv.ravel())), True)
+    ds, weight = emitter.sample_direction(it, mi.Point2f(mi.Float(su.ravel()), mi.Float(sv.ravel())), True)  # type: ignore[arg-type]
     d, w = np.array(ds.d).reshape(3, -1).T, np.array(weight).reshape(3, -1).T
     g = (np.maximum(d[:, 1], 0) + np.abs(d[:, 0]) + np.abs(d[:, 2])) / 5
     return float(np.mean((w @ LUMINANCE) * g))
@@ -218,7 +224,7 @@ def _weigh_emitters(emitters: list[dict], at, environment: bool) -> None:
     light = [direct_light(e, at) for e in emitters]
     if environment:
         light[0] *= ENVIRONMENT_SHARE
-    floor = 0.01 * max(np.mean(light), 1e-12)
+    floor = 0.01 * max(float(np.mean(light)), 1e-12)
     weights = quarters(light) if len(light) <= 4 else [max(w, floor) for w in light]
     for e, w in zip(emitters, weights):
         (e["emitter"] if "emitter" in e else e)["sampling_weight"] = float(w)
@@ -233,8 +239,8 @@ class BuiltScene:
     """A loaded Mitsuba scene plus per-shape tables indexed by drjit registry id (``si.shape``
     reinterpreted as UInt32): instance id, layer id and whether the shape has texture coords."""
 
-    mi_scene: object
-    moving: object             # mi.SceneParameters of vertex positions, normals and control points only
+    mi_scene: Any
+    moving: Any             # mi.SceneParameters of vertex positions, normals and control points only
     versions: tuple[int, int]
     tables: dict               # name -> numpy array indexed by registry id ("shape": 1 + index in names)
     instance_ids: list         # instance ids > 0 present in the scene
@@ -302,7 +308,8 @@ def _tables(mi_scene, scene: Scene) -> tuple[dict, list]:
     import mitsuba as mi
     shapes = {**{n: (m.instance, m.layer, m.uv is not None) for n, m in scene.meshes.items()},
               **{n: (c.instance, c.layer, False) for n, c in scene.curves.items()}}
-    reg = dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr()).numpy() if mi_scene.shapes() else np.zeros(0, np.uint32)
+    reg = (dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr()).numpy()  # type: ignore[attr-defined]
+           if mi_scene.shapes() else np.zeros(0, np.uint32))
     size = int(reg.max()) + 1 if len(reg) else 1
     tables = {k: np.zeros(size, np.uint32) for k in ("instance", "layer", "has_uv", "shape")}
     names = list(shapes)
@@ -365,7 +372,7 @@ def settle_frame_memory() -> None:
     milliseconds. A CUDA variant keeps its cache (device memory, and re-allocating is slow)."""
     import drjit as dr
     import mitsuba as mi
-    if not mi.variant().startswith("cuda"):
+    if not str(mi.variant()).startswith("cuda"):
         dr.flush_malloc_cache()
     _trim_heap()
 

@@ -21,7 +21,7 @@ def _intersect(scene: Scene, origins, directions, maxt=None, coherent: bool = Fa
     ray = mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k].astype(np.float32)) for k in range(3))),
                    mi.Vector3f(*(mi.Float(d[:, k].astype(np.float32)) for k in range(3))))
     if maxt is not None:
-        ray.maxt = mi.Float(np.broadcast_to(np.asarray(maxt, np.float64), len(d)).astype(np.float32))
+        ray.maxt = mi.Float(np.broadcast_to(np.asarray(maxt, np.float64), len(d)).astype(np.float32))  # type: ignore[assignment]
     si = built.mi_scene.ray_intersect_preliminary(ray, coherent=coherent)
     hit = si.is_valid()
     return built, si, hit, dr.reinterpret_array(mi.UInt32, si.shape)

@@ -40,7 +40,7 @@ def camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None, pix
         # PCG32 adds each lane's index to both inputs; taking it off again makes a ray's stream
         # depend on its pixel and stratum alone, whichever pixels are cast
         ray_id, lane = mi.UInt64(pixel * per_pixel + k), dr.arange(mi.UInt64, n * per_pixel)
-        rng = mi.PCG32(size=n * per_pixel, initstate=2 * ray_id - lane,
+        rng = mi.PCG32(size=n * per_pixel, initstate=2 * ray_id - lane,  # type: ignore[operator]
                        initseq=dr.opaque(mi.UInt64, seed) + ray_id - lane)
         ox = (mi.Float(k % cols) + rng.next_float32()) / cols
         oy = (mi.Float(k // cols) + rng.next_float32()) / rows

@@ -13,7 +13,7 @@ def _keeps(sampler: str, spp: int) -> bool:
     """Whether Mitsuba's ``sampler`` takes exactly ``spp`` (asked of Mitsuba itself, with its
     rounding warning silenced: rounding is what we are probing for)."""
     import mitsuba as mi
-    logger = mi.logger()
+    logger = mi.logger()  # type: ignore[operator]  # the stubs type it as an attribute
     level = logger.log_level()
     logger.set_log_level(mi.LogLevel.Error)
     try:

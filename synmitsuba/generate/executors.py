@@ -110,7 +110,8 @@ class LocalPool:
         """The pool is gone with everything in it: a lone task is charged, several become suspects."""
         lost = broken + [(i, "") for i in self.running.values()]
         self.running.clear()
-        self.pool.shutdown(wait=False, cancel_futures=True)
+        if self.pool is not None:
+            self.pool.shutdown(wait=False, cancel_futures=True)
         self.pool = None
         if len(lost) == 1:
             yield _died(*lost[0])

@@ -73,7 +73,8 @@ def export_coco(dataset_dir: str, out_json: str, keypoint_coords: str = "continu
         raise ConfigError("keypoint_coords", keypoint_coords, f"give one of {', '.join(KEYPOINT_COORDS)}")
     shift = KEYPOINT_COORDS[keypoint_coords]
     base = os.path.dirname(os.path.abspath(out_json))
-    images, anns = [], []
+    images: list[dict] = []
+    anns: list[dict] = []
     for image_id, stem in enumerate(list_samples(dataset_dir), 1):
         sample = read_sample(stem)
         images.append({"id": image_id, "file_name": os.path.relpath(f"{stem}.png", base),
@@ -164,5 +165,5 @@ def export_humandata(dataset_dir: str, out_npz: str) -> dict:
     arrays["keypoint_names"] = np.array(KEYPOINTS)
     with atomic_path(out_npz) as tmp:
         with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
+            np.savez_compressed(fh, allow_pickle=False, **arrays)
     return {"subjects": len(cols.get("image_path", []))}

@@ -8,6 +8,7 @@ become joints named ``<parent>_end`` so bone directions of the extremities are k
 from __future__ import annotations
 
 import os
+from typing import NoReturn
 
 import numpy as np
 
@@ -30,7 +31,7 @@ class _Tokens:
         self.items = [(tok, n + 1) for n, line in enumerate(text.splitlines()) for tok in line.split()]
         self.pos, self.path = 0, path
 
-    def fail(self, what: str):
+    def fail(self, what: str) -> NoReturn:
         line = self.items[min(self.pos, len(self.items) - 1)][1] if self.items else 1
         raise BVHError(f"{self.path}, line {line}: {what}")
 

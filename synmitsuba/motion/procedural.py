@@ -17,7 +17,7 @@ from synmitsuba.geometry import axis_rotation
 
 D = np.radians
 # kind -> {parameter: (low, high) sampled when not given, or a tuple of choices}
-PARAMS = {
+PARAMS: dict[str, dict[str, tuple]] = {
     "walk": {"speed": (1.0, 1.6), "stride": (1.0, 1.4), "amplitude": (0.7, 1.3), "style": ("normal", "relaxed", "brisk")},
     "jog": {"speed": (2.0, 3.0), "stride": (1.6, 2.2), "amplitude": (0.8, 1.2), "style": ("normal", "relaxed", "brisk")},
     "run": {"speed": (3.5, 5.0), "stride": (2.3, 3.0), "amplitude": (0.9, 1.2), "style": ("normal", "relaxed", "brisk")},
@@ -281,7 +281,8 @@ def procedural_motion(kind: str, rng: np.random.Generator, seconds: float = 2.0,
     n = max(2, int(round(seconds * fps)))
     t = np.arange(n) / fps
     p = _Pose(n)
-    lift, anchor = None, "stance"
+    lift: np.ndarray | None = None
+    anchor = "stance"
     root = None
     if kind in ("walk", "jog", "run"):
         root = _locomotion(p, t, kind, a)
@@ -308,7 +309,7 @@ def procedural_motion(kind: str, rng: np.random.Generator, seconds: float = 2.0,
     if root is None:
         root = _plant(p, anchor, lift)
     if kind == "jump" and a["speed"] > 0:  # a forward jump travels during the flight only
-        air = lift > 0
+        air = np.asarray(lift) > 0
         root[:, 2] += np.cumsum(air) / fps * a["speed"]
     return Motion(p.skel, p.R, root, float(fps), labels=(kind,), source=f"procedural:{kind}", meta={"params": a})
 

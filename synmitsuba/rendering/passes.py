@@ -11,7 +11,7 @@ import functools
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -91,12 +91,12 @@ class Hit:
     """What the pixel-centre rays found: the surface interaction, the hit flag, the unit ray
     directions and each hit's shape registry id; the inputs of every exact pass."""
 
-    si: object
-    hit: object
-    d: object
-    reg: object
+    si: Any  # Mitsuba / drjit arrays
+    hit: Any
+    d: Any
+    reg: Any
     camera: Camera
-    built: object
+    built: Any
 
     @functools.cached_property
     def has_uv(self):

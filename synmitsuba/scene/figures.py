@@ -1,6 +1,8 @@
 """Stick figures: a mesh of spheres and cylinders for joint positions (previews, debugging)."""
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 
@@ -14,5 +16,5 @@ def stick_figure(positions: np.ndarray, parents, radius: float = 0.025) -> tuple
         parts.append(ball)
         if p >= 0 and np.linalg.norm(positions[i] - positions[p]) > 1e-6:
             parts.append(trimesh.creation.cylinder(radius=radius, segment=[positions[p], positions[i]], sections=10))
-    mesh = trimesh.util.concatenate(parts)
+    mesh: Any = trimesh.util.concatenate(parts)
     return np.asarray(mesh.vertices), np.asarray(mesh.faces)

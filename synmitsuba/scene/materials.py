@@ -25,7 +25,7 @@ def _rgb(name: str, value) -> tuple[float, float, float]:
         arr = np.repeat(arr, 3)
     if arr.size != 3 or not np.isfinite(arr).all() or (arr < 0).any():
         raise ConfigError(name, value, "give 3 finite, non-negative linear RGB values (or one grey value)")
-    return tuple(float(x) for x in arr)
+    return float(arr[0]), float(arr[1]), float(arr[2])
 
 
 def _image(name: str, value, channels: int | None, colour: bool = False) -> np.ndarray:
@@ -62,7 +62,7 @@ class Material:
     (u, v) times over the uv square; over the bump when both are given) perturb shading normals.
     """
 
-    base_color: tuple = (0.5, 0.5, 0.5)
+    base_color: float | tuple = (0.5, 0.5, 0.5)
     texture: np.ndarray | None = None
     kind: str = "diffuse"
     roughness: float = 0.5
