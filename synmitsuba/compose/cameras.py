@@ -17,13 +17,67 @@ of the best, the one farthest in azimuth from those chosen (diversity), repeated
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.schema import Choice, ListOf, Number, Params, POSITIVE, Range, spec
 
-MOTIONS = ("static", "tracking", "orbit", "dolly_zoom", "handheld")
+@dataclass
+class _Shot:
+    """A camera's arrays over the clip while its motion shapes them: eye, target, up (F, 3), K (F, 3, 3)."""
+
+    eye: np.ndarray
+    target: np.ndarray
+    up: np.ndarray
+    K: np.ndarray
+
+
+def _orbit(s: _Shot, group: Group, azimuth: float, pitch: float, distance: float, t, cfg, rng) -> None:
+    sweep = np.radians(rng.uniform(*cfg.orbit_deg)) * rng.choice([-1, 1])
+    s.eye = s.target + distance * np.stack([_direction(azimuth + sweep * u, pitch) for u in t[:, 0]])
+
+
+def _tracking(s: _Shot, group: Group, azimuth: float, pitch: float, distance: float, t, cfg, rng) -> None:
+    s.target = group.centres.copy()
+
+
+def _dolly_zoom(s: _Shot, group: Group, azimuth: float, pitch: float, distance: float, t, cfg, rng) -> None:
+    """Focal length and distance change together: the group keeps its size."""
+    scale = 1 + (rng.uniform(*cfg.zoom) - 1) * t
+    s.K = s.K.copy()
+    s.K[:, 0, 0] *= scale[:, 0]
+    s.K[:, 1, 1] *= scale[:, 0]
+    s.eye = s.target + (s.eye - s.target) * scale
+
+
+def _handheld(s: _Shot, group: Group, azimuth: float, pitch: float, distance: float, t, cfg, rng) -> None:
+    F = len(t)
+    s.eye = s.eye + cfg.shake_m * _smooth_noise(rng, F, 3)
+    s.target = s.target + distance * np.tan(np.radians(cfg.shake_deg)) * _smooth_noise(rng, F, 3)
+    roll = np.radians(cfg.shake_deg) * _smooth_noise(rng, F, 1)[:, 0]
+    side = np.cross(s.target - s.eye, [0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side, axis=1, keepdims=True)
+    s.up = np.cos(roll)[:, None] * s.up + np.sin(roll)[:, None] * side
+
+
+@dataclass(frozen=True)
+class CameraMotion:
+    """A camera motion: ``shape(shot, group, azimuth, pitch, distance, t (F, 1) in [0, 1], cfg,
+    rng)`` moves a static shot in place; ``zooms``: its focal length grows over the clip, so
+    the distances it may start from are narrowed by ``cfg.zoom``."""
+
+    shape: Callable
+    zooms: bool = False
+
+
+# A new camera motion is one entry here (CameraConfig.motion accepts every name).
+CAMERA_MOTIONS: dict[str, CameraMotion] = {
+    "static": CameraMotion(lambda *args: None), "tracking": CameraMotion(_tracking), "orbit": CameraMotion(_orbit),
+    "dolly_zoom": CameraMotion(_dolly_zoom, zooms=True), "handheld": CameraMotion(_handheld),
+}
+MOTIONS = tuple(CAMERA_MOTIONS)
 
 
 @dataclass
@@ -38,7 +92,7 @@ class CameraConfig(Params):
     distance_max: float = spec(10.0, Number(0.1, 1000), doc="L_max, metres")
     fit_lambda: float = spec(1.0, Number(0.1, 10), doc="lambda in L_min: larger keeps subjects further inside")
     target_height: float = spec(0.9, Number(0, 3), doc="height of the point cameras look at, metres")
-    motion: list = spec(factory=lambda: ["static"], check=ListOf(Choice(MOTIONS), 1), doc="kinds drawn per view")
+    motion: list = spec(factory=lambda: ["static"], check=ListOf(Choice(CAMERA_MOTIONS), 1), doc="kinds drawn per view")
     shells: int = spec(4, POSITIVE, doc="candidate distances")
     azimuths: int = spec(24, POSITIVE, doc="candidate azimuths")
     pitches: int = spec(3, POSITIVE, doc="candidate pitches")
@@ -108,36 +162,18 @@ def _direction(azimuth: float, pitch: float) -> np.ndarray:
     return np.array([np.cos(pitch) * np.sin(azimuth), np.sin(pitch), np.cos(pitch) * np.cos(azimuth)])
 
 
+
+
 def trajectory(kind: str, group: Group, azimuth: float, pitch: float, distance: float, K: np.ndarray,
                cfg: CameraConfig, rng: np.random.Generator) -> Trajectory:
     """One candidate camera over the clip (angles in radians)."""
     F = len(group.centres)
     t = np.linspace(0.0, 1.0, F)[:, None]
     target = np.repeat(group.centre[None], F, 0)
-    up = np.repeat([[0.0, 1.0, 0.0]], F, 0)
-    Ks = np.repeat(K[None], F, 0)
-    if kind == "orbit":
-        sweep = np.radians(rng.uniform(*cfg.orbit_deg)) * rng.choice([-1, 1])
-        eye = target + distance * np.stack([_direction(azimuth + sweep * s, pitch) for s in t[:, 0]])
-    else:
-        eye = np.repeat((group.centre + distance * _direction(azimuth, pitch))[None], F, 0)
-    if kind == "tracking":
-        target = group.centres.copy()
-    elif kind == "dolly_zoom":  # focal length and distance change together: the group keeps its size
-        scale = 1 + (rng.uniform(*cfg.zoom) - 1) * t
-        Ks = Ks.copy()
-        Ks[:, 0, 0] *= scale[:, 0]
-        Ks[:, 1, 1] *= scale[:, 0]
-        eye = target + (eye - target) * scale
-    elif kind == "handheld":
-        eye = eye + cfg.shake_m * _smooth_noise(rng, F, 3)
-        target = target + distance * np.tan(np.radians(cfg.shake_deg)) * _smooth_noise(rng, F, 3)
-        roll = np.radians(cfg.shake_deg) * _smooth_noise(rng, F, 1)[:, 0]
-        fwd = target - eye
-        side = np.cross(fwd, [0.0, 1.0, 0.0])
-        side /= np.linalg.norm(side, axis=1, keepdims=True)
-        up = np.cos(roll)[:, None] * up + np.sin(roll)[:, None] * side
-    return Trajectory(kind, eye, target, up, Ks)
+    eye = np.repeat((group.centre + distance * _direction(azimuth, pitch))[None], F, 0)
+    shot = _Shot(eye, target, np.repeat([[0.0, 1.0, 0.0]], F, 0), np.repeat(K[None], F, 0))
+    CAMERA_MOTIONS[kind].shape(shot, group, azimuth, pitch, distance, t, cfg, rng)
+    return Trajectory(kind, shot.eye, shot.target, shot.up, shot.K)
 
 
 def inside_boxes(points: np.ndarray, boxes: np.ndarray, margin: float = 0.1) -> np.ndarray:
@@ -182,9 +218,10 @@ def candidates(group: Group, object_boxes: np.ndarray, cfg: CameraConfig, rng: n
                 K = sample_intrinsics(cfg, rng)
                 kind = str(rng.choice(cfg.motion))
                 lo = l_min(group, narrow_fov(K, cfg.width, cfg.height), cfg.fit_lambda)
-                if kind == "dolly_zoom":
+                zooms = CAMERA_MOTIONS[kind].zooms
+                if zooms:
                     lo *= max(1.0, 1.0 / cfg.zoom[0])
-                hi = cfg.distance_max / (max(1.0, cfg.zoom[1]) if kind == "dolly_zoom" else 1.0)
+                hi = cfg.distance_max / (max(1.0, cfg.zoom[1]) if zooms else 1.0)
                 if lo > hi:
                     continue
                 dist = lo + (hi - lo) * (s + rng.uniform(0.1, 0.9)) / cfg.shells

@@ -11,6 +11,7 @@ from __future__ import annotations
 import glob
 import os
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -86,9 +87,42 @@ class EnvObject(Params):
     roughness: float = spec(0.7, Number(0, 1))
 
 
+def _tiles(shade, u, coarse, fine, rng):
+    """4 x 4 slabs with mortar joints and per-slab tone."""
+    tone = 0.85 + 0.3 * rng.random((4, 4))
+    idx = np.minimum((u * 4).astype(int), 3)
+    shade = shade * tone[idx[:, None], idx[None, :]]
+    joint = (np.abs((u * 4) % 1 - 0.5) > 0.47)
+    return np.where(joint[:, None] | joint[None, :], 0.45, shade), 0.0
+
+
+def _wood(shade, u, coarse, fine, rng):
+    """Planks along u with grain."""
+    plank = np.minimum((u * 6).astype(int), 5)
+    tone = 0.8 + 0.4 * rng.random(6)
+    grain = 0.9 + 0.1 * np.sin(2 * np.pi * (8 * u[None, :] + 3 * coarse))
+    shade = tone[plank][:, None] * grain * (0.95 + 0.1 * fine)
+    return np.where((np.abs((u * 6) % 1 - 0.5) > 0.48)[:, None], 0.4, shade), 0.0
+
+
+def _grass(shade, u, coarse, fine, rng):
+    """Blotchier than the rest, with yellowish patches."""
+    return 0.6 + 0.5 * coarse + 0.4 * (fine - 0.5), (coarse[..., None] - 0.5) * np.array([0.06, 0.03, -0.01])
+
+
+def _plain(shade, u, coarse, fine, rng):
+    return shade, 0.0
+
+
+# A ground kind is one entry: (shade (n, n) of the noise, u (n,), coarse and fine noise (n, n),
+# rng) -> (shade (n, n) times the ground's colour, an RGB offset added after).
+GROUND_TEXTURES: dict[str, Callable] = {"tiles": _tiles, "grass": _grass, "asphalt": _plain, "sand": _plain,
+                                        "wood": _wood, "concrete": _plain}
+
+
 @dataclass
 class Ground(Params):
-    texture: str = spec("concrete", Choice(("tiles", "grass", "asphalt", "sand", "wood", "concrete")))
+    texture: str = spec("concrete", Choice(GROUND_TEXTURES))
     color: list = spec(factory=lambda: [0.35, 0.35, 0.33], check=Vector(3, 0, 1, what="linear RGB"))
     tile_m: float = spec(1.0, Number(0.05, 20), doc="metres one texture repeat covers")
     roughness: float = spec(0.8, Number(0, 1))
@@ -183,23 +217,8 @@ def ground_texture(ground: Ground, rng: np.random.Generator, n: int = 256) -> np
     coarse, fine = _periodic_noise(rng, n, 1.2), _periodic_noise(rng, n, 0.3)
     shade = 0.75 + 0.3 * coarse + 0.15 * (fine - 0.5)
     u = (np.arange(n) + 0.5) / n
-    if ground.texture == "tiles":  # 4 x 4 slabs with mortar joints and per-slab tone
-        tone = 0.85 + 0.3 * rng.random((4, 4))
-        idx = np.minimum((u * 4).astype(int), 3)
-        shade = shade * tone[idx[:, None], idx[None, :]]
-        joint = (np.abs((u * 4) % 1 - 0.5) > 0.47)
-        shade = np.where(joint[:, None] | joint[None, :], 0.45, shade)
-    elif ground.texture == "wood":  # planks along u with grain
-        plank = np.minimum((u * 6).astype(int), 5)
-        tone = 0.8 + 0.4 * rng.random(6)
-        grain = 0.9 + 0.1 * np.sin(2 * np.pi * (8 * u[None, :] + 3 * coarse))
-        shade = tone[plank][:, None] * grain * (0.95 + 0.1 * fine)
-        shade = np.where((np.abs((u * 6) % 1 - 0.5) > 0.48)[:, None], 0.4, shade)
-    elif ground.texture == "grass":
-        shade = 0.6 + 0.5 * coarse + 0.4 * (fine - 0.5)
-    tex = base[None, None, :] * shade[..., None]
-    if ground.texture == "grass":  # yellowish patches
-        tex = tex + (coarse[..., None] - 0.5) * np.array([0.06, 0.03, -0.01])
+    shade, offset = GROUND_TEXTURES[ground.texture](shade, u, coarse, fine, rng)
+    tex = base[None, None, :] * shade[..., None] + offset
     return np.clip(tex, 0.0, 1.0).astype(np.float32)
 
 
