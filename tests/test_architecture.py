@@ -365,3 +365,26 @@ def test_format_document_lists_exactly_the_registered_passes():
     table = text.split("## Passes", 1)[1].split("\n\n", 2)[1]
     rows = [line.strip("|").split("|")[0] for line in table.splitlines() if line.startswith("| ")][1:]
     assert {n.strip() for row in rows for n in row.split(",")} == set(PASSES)
+
+
+def test_new_kinds_are_one_registry_entry(monkeypatch):
+    """A camera motion, a ground texture and a garment shape are added by one entry each; the
+    config checks accept the new names and the builders use them (no if-chain to extend)."""
+    from synmitsuba.body import garments
+    from synmitsuba.compose import cameras, environments
+    raise_eye = cameras.CameraMotion(lambda s, *args: setattr(s, "eye", s.eye + [0.0, 1.0, 0.0]))
+    monkeypatch.setitem(cameras.CAMERA_MOTIONS, "crane", raise_eye)
+    cfg = cameras.CameraConfig.from_dict({"motion": ["crane"]})
+    F = 5
+    group = cameras.Group(np.zeros((F, 3)) + [0, 1, 0], np.array([0.0, 1.0, 0.0]), np.zeros((1, 6)), np.zeros((F, 1, 6)))
+    K = np.array([[300.0, 0, 160], [0, 300, 120], [0, 0, 1]])
+    still = cameras.trajectory("static", group, 0.0, 0.0, 4.0, K, cfg, np.random.default_rng(0))
+    crane = cameras.trajectory("crane", group, 0.0, 0.0, 4.0, K, cfg, np.random.default_rng(0))
+    assert np.allclose(crane.eye - still.eye, [0.0, 1.0, 0.0]) and crane.kind == "crane"
+    monkeypatch.setitem(environments.GROUND_TEXTURES, "snow", lambda shade, *args: (np.ones_like(shade), 0.0))
+    ground = environments.Ground.from_dict({"texture": "snow", "color": [0.9, 0.8, 0.7]})
+    tex = environments.ground_texture(ground, np.random.default_rng(0), 8)
+    assert np.allclose(tex, [0.9, 0.8, 0.7])
+    with pytest.raises(ConfigError, match="texture = 'lava'"):
+        environments.Ground.from_dict({"texture": "lava"})
+    assert set(g.shape for g in garments.GARMENTS.values()) <= set(garments.GARMENT_SHAPES)
