@@ -1,4 +1,5 @@
-"""``Annotator``: per-subject records of one view at one frame (``sample.subjects``) and the
+"""``Annotator``: per-subject records of one view at one frame (``sample.subjects``, typed as
+``annotate.labels.SubjectLabels``) and the
 layered body passes (``annotate.body``: body part, surface point, body depth and normal, cloth
 thickness).
 
@@ -20,6 +21,7 @@ import numpy as np
 from synmitsuba.annotate.body import BodyLayer
 from synmitsuba.annotate.bodyparams import body_params_in_camera
 from synmitsuba.annotate.keypoints import keypoint_visibility
+from synmitsuba.annotate.labels import BodyParams, SubjectLabels
 from synmitsuba.engine.raycast import far_side, hits_through
 from synmitsuba.engine.rays import pixel_centre_rays
 from synmitsuba.errors import ConfigError
@@ -92,7 +94,7 @@ class Annotator:
         self.bodies.pose([b for _, b, _ in self._posed])
         self._frame = frame
 
-    def annotate(self, sample, scene: Scene, frame: int, valid=None) -> list[dict]:
+    def annotate(self, sample, scene: Scene, frame: int, valid=None) -> list[SubjectLabels]:
         """Fill and return ``sample.subjects`` for ``scene`` posed at ``frame``. A record is
         valid when some pixel of the subject is visible and ``valid`` (one bool per subject,
         e.g. a view's validity from composition) allows it."""
@@ -108,9 +110,9 @@ class Annotator:
             # cast along the instance pass's own rays, so the union only guards visible within amodal
             amodal = self._amodal(i, p.instance, cam, rays, scene) | visible
             rec = self._record(p, rot, root, cam, scene, instances, amodal, visible, *self._posed[i])
-            rec["valid"] = bool(rec["visible_fraction"] > 0 and (valid is None or valid[i]))
-            rec["layer_pixels"] = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
-            rec.update(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))
+            rec.valid = bool(rec.visible_fraction > 0 and (valid is None or valid[i]))
+            rec.layer_pixels = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
+            rec.add_body_models(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))
             records.append(rec)
         sample.subjects = records
         sample.passes.update(self.bodies.passes(cam, scene, sample.passes["instance"], sample.passes["depth"],
@@ -153,23 +155,20 @@ class Annotator:
         mask[y0:y1, x0:x1] = (hits["instance"] == instance).reshape(y1 - y0, x1 - x0)
         return mask
 
-    def _record(self, p, rot, root, cam: Camera, scene, instances, amodal, visible, kp, body, joints) -> dict:
+    def _record(self, p, rot, root, cam: Camera, scene, instances, amodal, visible, kp, body, joints) -> SubjectLabels:
         vis, frac = keypoint_visibility(scene, cam, kp, body, p.instance, instances)
         kp2d, _ = cam.project(kp)
         box, centre, scale = keypoint_box(kp2d, vis)
         rot_c, root_c = body_params_in_camera(p.human.skeleton, rot, root, cam)
         phen = dict(p.human.recipe.phenotypes)
         n_amodal = int(amodal.sum())
-        return {"instance": int(p.instance), "keypoints3d_world": kp, "keypoints3d_cam": kp @ cam.R.T + cam.t,
-                "keypoints2d": kp2d, "visibility": vis, "visible_fraction_kp": frac,
-                "joints3d_world": joints, "joints3d_cam": joints @ cam.R.T + cam.t,
-                "amodal_mask": amodal, "visible_fraction": float(visible.sum() / n_amodal) if n_amodal else 0.0,
-                "bbox_visible": mask_box(visible), "bbox_amodal": mask_box(amodal), "bbox_keypoints": box,
-                "center": centre, "scale": scale,
-                "body_params_world": {"rotations": matrix_to_axis_angle(rot), "root_translation": np.asarray(root, np.float64),
-                                      "phenotypes": phen},
-                "body_params_cam": {"rotations": matrix_to_axis_angle(rot_c), "root_translation": root_c, "phenotypes": phen},
-                "root_world": joints[0]}
+        return SubjectLabels(
+            int(p.instance), keypoints3d_world=kp, keypoints3d_cam=kp @ cam.R.T + cam.t, keypoints2d=kp2d,
+            visibility=vis, visible_fraction_kp=frac, joints3d_world=joints, joints3d_cam=joints @ cam.R.T + cam.t,
+            amodal_mask=amodal, visible_fraction=float(visible.sum() / n_amodal) if n_amodal else 0.0,
+            bbox_visible=mask_box(visible), bbox_amodal=mask_box(amodal), bbox_keypoints=box, center=centre, scale=scale,
+            body_params_world=BodyParams(matrix_to_axis_angle(rot), np.asarray(root, np.float64), phen),
+            body_params_cam=BodyParams(matrix_to_axis_angle(rot_c), root_c, phen), root_world=joints[0])
 
 
 def _joints(skeleton, rot, root) -> np.ndarray:

@@ -12,9 +12,11 @@ from __future__ import annotations
 import json
 import os
 import sys
+from collections.abc import Mapping
 
 import numpy as np
 
+from synmitsuba.annotate.labels import SubjectLabels
 from synmitsuba.body.anny_model import KEYPOINTS
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.files import atomic_path
@@ -45,7 +47,7 @@ def _channels(sample: Sample) -> dict[str, np.ndarray]:
 
 def _plain(value):
     """JSON-ready copy of a label record's value (arrays as lists)."""
-    if isinstance(value, dict):
+    if isinstance(value, Mapping):  # dicts and label records (annotate.labels)
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
@@ -54,24 +56,6 @@ def _plain(value):
     if isinstance(value, np.generic):
         return value.item()
     return value
-
-
-ARRAY_KEYS = ("keypoints3d_world", "keypoints3d_cam", "keypoints2d", "visibility", "visible_fraction_kp",
-              "joints3d_world", "joints3d_cam", "root_world")
-
-
-def _record_back(rec: dict, ch: dict) -> dict:
-    out = dict(rec)
-    for k in ARRAY_KEYS:
-        out[k] = np.asarray(rec[k], np.uint8 if k == "visibility" else np.float64)
-    for k in ("body_params_world", "body_params_cam"):
-        out[k] = {**rec[k], "rotations": np.asarray(rec[k]["rotations"]),
-                  "root_translation": np.asarray(rec[k]["root_translation"])}
-    for k, v in rec.items():  # body-model parameters (smplx_world, smpl_cam, ...)
-        if isinstance(v, dict) and "model" in v:
-            out[k] = {name: (np.asarray(x, np.float64) if isinstance(x, list) else x) for name, x in v.items()}
-    out["amodal_mask"] = ch[f"amodal.{rec['instance']}"].astype(bool)
-    return out
 
 
 def _passes(ch: dict) -> dict[str, np.ndarray]:
@@ -166,4 +150,5 @@ def read_sample(stem: str) -> Sample:
         side = json.loads(f.header()["synmitsuba"])
     cov = {int(k.split(".", 1)[1]): v.astype(np.float32) for k, v in ch.items() if k.startswith("coverage.")}
     return Sample(camera=Camera.from_dict(side["camera"]), passes=_passes(ch), coverage=dict(sorted(cov.items())),
-                  meta=side.get("meta", {}), subjects=[_record_back(r, ch) for r in side.get("subjects", [])])
+                  meta=side.get("meta", {}), subjects=[SubjectLabels.from_json(r, ch[f"amodal.{r['instance']}"].astype(bool))
+                            for r in side.get("subjects", [])])
