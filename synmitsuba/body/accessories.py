@@ -36,9 +36,26 @@ def _place(mesh, R, t):
     return np.asarray(mesh.vertices) @ R.T + t, np.asarray(mesh.faces)
 
 
-def _local(head):
+@dataclass
+class HeadFrame:
+    """The rest head that accessories are fitted to: a frame (``centre``, ``up``, ``forward``),
+    the skull's half extents ``radii``, the head vertices' ``mask``, anny's eye, nose and ear
+    keypoints, and ``chin``: the head-frame height of the chin's underside (``under_chin``)."""
+
+    centre: np.ndarray
+    up: np.ndarray
+    forward: np.ndarray
+    radii: np.ndarray
+    mask: np.ndarray
+    eyes: np.ndarray   # (2, 3) left, right
+    nose: np.ndarray   # (3,)
+    ears: np.ndarray   # (2, 3) left, right
+    chin: float = 0.0
+
+
+def _local(head: HeadFrame):
     """The head frame (columns side, up, forward) and centre: local = (world - centre) @ R."""
-    return frame(head["forward"], head["up"]), head["centre"]
+    return frame(head.forward, head.up), head.centre
 
 
 def _glasses(p: AccessoryParams, body, head):
@@ -47,8 +64,8 @@ def _glasses(p: AccessoryParams, body, head):
     clear the face by 6 mm and the bridge the nose by 4 mm: it rests on the face, not in it."""
     import trimesh
     R, c = _local(head)
-    face = (body.vertices[head["mask"]] - c) @ R
-    eyes, ears = (head["eyes"] - c) @ R, (head["ears"] - c) @ R
+    face = (body.vertices[head.mask] - c) @ R
+    eyes, ears = (head.eyes - c) @ R, (head.ears - c) @ R
     mid, half, r = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2, 0.022 * p.scale
     ring_path = np.zeros(len(face), bool)  # face points under the rims' tube (the lenses are open)
     for x in (-1, 1):
@@ -87,7 +104,7 @@ def _cap_line(head, v: np.ndarray) -> np.ndarray:
     """Height of head-frame points ``v`` over a cap's edge: a line 3 cm above the eyes at the
     front, dropping 3 cm for every 10 cm towards the back."""
     R, c = _local(head)
-    mid = ((head["eyes"] - c) @ R).mean(0)
+    mid = ((head.eyes - c) @ R).mean(0)
     return v[:, 1] - (mid[1] + 0.03 - 0.3 * (mid[2] - v[:, 2]))
 
 
@@ -108,12 +125,12 @@ def _cap(p: AccessoryParams, body, head):
     import trimesh
     R, c = _local(head)
     v = (body.vertices - c) @ R
-    used, f = submesh(body.faces, head["mask"])
+    used, f = submesh(body.faces, head.mask)
     n = vertex_normals(body.vertices, body.faces)[used] @ R
     f, dome = cut(f, _cap_line(head, v[used]), v[used] + n * 0.009)
     fine = trimesh.Trimesh(dome, f, process=False).subdivide_loop(1)  # the body's head is too coarse for a shiny crown
     dome, f = np.asarray(fine.vertices), np.asarray(fine.faces)
-    bill = _bill(v[head["mask"]], ((head["eyes"] - c) @ R).mean(0)[1] + 0.03, p.scale)
+    bill = _bill(v[head.mask], ((head.eyes - c) @ R).mean(0)[1] + 0.03, p.scale)
     return np.concatenate([dome, bill[0]]) @ R.T + c, np.concatenate([f, bill[1] + len(dome)])
 
 
@@ -143,7 +160,7 @@ def _headphones(p: AccessoryParams, body, head):
     """A band arching over the crown from ear to ear (in the head's side-up plane) and a cup
     over each ear."""
     import trimesh
-    rad = head["radii"]
+    rad = head.radii
     band = trimesh.creation.torus(rad[0] + 0.02, 0.008, major_sections=32, minor_sections=8)  # in the xy plane
     v = band.vertices
     band = trimesh.Trimesh(v, band.faces[(v[band.faces][..., 1] > -0.01).all(1)])  # the upper half arc
@@ -155,7 +172,7 @@ def _headphones(p: AccessoryParams, body, head):
         cup.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
         cup.apply_translation([x * (rad[0] + 0.015), 0, 0])
         parts.append(cup)
-    return _place(trimesh.util.concatenate(parts), frame(head["forward"], head["up"]), head["centre"])
+    return _place(trimesh.util.concatenate(parts), frame(head.forward, head.up), head.centre)
 
 
 def _backpack(p: AccessoryParams, body, head):
@@ -214,13 +231,13 @@ def mask_uv(head, vertices: np.ndarray) -> tuple[np.ndarray, tuple[float, float]
 def _mask_outline(head, v: np.ndarray) -> np.ndarray:
     """> 0 inside the mask, for head-frame points ``v`` (columns side, up, forward): under a top
     edge that rises over the nose bridge (half-way from anny's nose keypoint to its eyes) from
-    0.15 of that drop at the cheeks, above a line 6 mm under the chin (``head["chin"]``), in
+    0.15 of that drop at the cheeks, above a line 6 mm under the chin (``head.chin``), in
     front of a plane at 0.18 of the head's depth before its centre (2-3 cm short of the ears)."""
     R, c = _local(head)
-    nose, eyes = (head["nose"] - c) @ R, ((head["eyes"] - c) @ R).mean(0)
+    nose, eyes = (head.nose - c) @ R, ((head.eyes - c) @ R).mean(0)
     drop, x = eyes[1] - nose[1], v[:, 0] - nose[0]
     top = nose[1] + drop * (0.15 + 0.35 * np.exp(-(x / 0.015) ** 2))
-    return np.minimum.reduce([top - v[:, 1], v[:, 1] - (head["chin"] - 0.006), v[:, 2] - MASK_SIDE * head["radii"][2]])
+    return np.minimum.reduce([top - v[:, 1], v[:, 1] - (head.chin - 0.006), v[:, 2] - MASK_SIDE * head.radii[2]])
 
 
 def under_chin(vertices: np.ndarray, head) -> float:
@@ -229,7 +246,7 @@ def under_chin(vertices: np.ndarray, head) -> float:
     (the throat); 2.7 eye-to-nose drops under the nose if none is within 12 cm."""
     R, c = _local(head)
     v = (vertices - c) @ R
-    nose, eyes = (head["nose"] - c) @ R, ((head["eyes"] - c) @ R).mean(0)
+    nose, eyes = (head.nose - c) @ R, ((head.eyes - c) @ R).mean(0)
     mid = v[(np.abs(v[:, 0] - nose[0]) < 0.01) & (v[:, 1] < nose[1]) & (v[:, 1] > nose[1] - 0.12)]
     for y in np.arange(nose[1] - 0.03, nose[1] - 0.12, -0.002):
         if mid[np.abs(mid[:, 1] - y) < 0.004, 2].max(initial=-np.inf) < nose[2] - 0.025:
@@ -323,10 +340,10 @@ def _ear_loop(body, head, shell: np.ndarray, x: int, points: int = 36) -> np.nda
     and under the lobe back to the bottom corner: an ellipse round the pinna (anny's ear keypoint
     sits at its front) joined to the corners, laid 2.5 mm off the head's surface."""
     R, c = _local(head)
-    rim = shell[(shell[:, 0] * x > 0.03) & (shell[:, 2] < MASK_SIDE * head["radii"][2] + 0.004)]  # its side edge
+    rim = shell[(shell[:, 0] * x > 0.03) & (shell[:, 2] < MASK_SIDE * head.radii[2] + 0.004)]  # its side edge
     top, bottom = rim[rim[:, 1].argmax()], rim[rim[:, 1].argmin()]
-    k = head["radii"][1] / 0.08
-    ear = (head["ears"][0 if x > 0 else 1] - c) @ R
+    k = head.radii[1] / 0.08
+    ear = (head.ears[0 if x > 0 else 1] - c) @ R
     centre = ear + np.array([0, -0.004, -0.010]) * k
     t = np.linspace(-0.15 * np.pi, 1.1 * np.pi, points)  # from over the ear's front, over, behind and under it
     reach = np.where(np.cos(t) > 0, 0.034, 0.040) * k

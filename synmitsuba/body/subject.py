@@ -142,11 +142,10 @@ class LayeredHuman:
         lo, hi = skull.min(0), skull.max(0)
         centre = np.array([(lo[0] + hi[0]) / 2, lo[1] + 0.45 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2])
         kp, names = body.keypoint_weights @ body.vertices, list(body.keypoint_labels)
-        self.head = {"centre": centre, "up": np.array([0, 1.0, 0]), "forward": np.array([0, 0, 1.0]),
-                     "radii": (hi - lo) / 2, "mask": head,
-                     "eyes": kp[[names.index("left_eye"), names.index("right_eye")]], "nose": kp[names.index("nose")],
-                     "ears": kp[[names.index("left_ear"), names.index("right_ear")]]}
-        self.head["chin"] = acc.under_chin(body.vertices, self.head)
+        self.head = acc.HeadFrame(centre, np.array([0, 1.0, 0]), np.array([0, 0, 1.0]), (hi - lo) / 2, head,
+                                  kp[[names.index("left_eye"), names.index("right_eye")]], kp[names.index("nose")],
+                                  kp[[names.index("left_ear"), names.index("right_ear")]])
+        self.head.chin = acc.under_chin(body.vertices, self.head)
         idx = np.flatnonzero(head)
         remap = -np.ones(len(body.vertices), np.int64)
         remap[idx] = np.arange(len(idx))
@@ -159,7 +158,7 @@ class LayeredHuman:
         reachable = np.linalg.norm(body.vertices - centre, axis=1) < (hi - lo).max() / 2 + reach(self.recipe.hair)
         self.hair_lift = cover_heights(body.vertices, surface.normals,
                                        [(p.rest, p.faces) for p in self.parts[1:] if p.name != "shoes"], reachable)
-        self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head["ears"])
+        self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head.ears)
         self.head_bone = sk.index("head")
 
     def _build_accessories(self) -> None:
@@ -204,7 +203,7 @@ class LayeredHuman:
             return
         body, mat = self.body, self.parts[0].material
         assert mat.texture is not None  # the body is always textured
-        head = np.flatnonzero(self.head["mask"])
+        head = np.flatnonzero(self.head.mask)
         cover = np.zeros(len(body.vertices))
         beard = self.hair.region == 5
         cover[head] = np.maximum(SCALP_TINT * root_cover(body.vertices[head], self.hair.points[~beard, 0]),

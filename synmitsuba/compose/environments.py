@@ -8,6 +8,7 @@ and the drawn lighting into a ``Scene``. Objects are boxes to placement and came
 """
 from __future__ import annotations
 
+import dataclasses
 import glob
 import os
 from dataclasses import dataclass, field
@@ -183,22 +184,58 @@ def load_environment(name_or_path: str, where: str = "environment") -> Environme
 
 
 # -- lighting -----------------------------------------------------------------------------
-def sample_lighting(env: Environment, rng: np.random.Generator) -> dict:
-    """Draw this environment's lighting: a plain dict stored in a scene spec."""
+@dataclass
+class SunskyLighting:
+    """A drawn sun and sky: ``sun_direction`` towards the sun (unit, y up), ``turbidity``."""
+
+    sun_direction: list
+    turbidity: float
+    type: str = "sunsky"
+
+    def emitter(self) -> SunSky:
+        return SunSky(sun_direction=tuple(self.sun_direction), turbidity=self.turbidity)
+
+
+@dataclass
+class EnvmapLighting:
+    """A drawn HDRI: ``file`` relative to ``scenes/``, its ``scale`` and ``rotation_deg``."""
+
+    file: str
+    scale: float
+    rotation_deg: float
+    type: str = "envmap"
+
+    def emitter(self) -> EnvMap:
+        return EnvMap(source=os.path.join(SCENES_DIR, self.file), scale=self.scale, rotation_deg=self.rotation_deg)
+
+
+LIGHTINGS: dict[str, type] = {"sunsky": SunskyLighting, "envmap": EnvmapLighting}
+
+
+def lighting_to_dict(lighting) -> dict:
+    """A drawn lighting as a scene spec stores it: ``{"type", ...fields}`` (``{}``: none)."""
+    if lighting is None:
+        return {}
+    d = dataclasses.asdict(lighting)
+    return {"type": d.pop("type"), **d}
+
+
+def lighting_from_dict(d: dict):
+    """``lighting_to_dict``'s inverse (``None`` for ``{}``)."""
+    if not d:
+        return None
+    return LIGHTINGS[d["type"]](**{k: v for k, v in d.items() if k != "type"})
+
+
+def sample_lighting(env: Environment, rng: np.random.Generator) -> SunskyLighting | EnvmapLighting:
+    """Draw this environment's lighting."""
     lit = env.lighting
     if lit.type == "sunsky":
         el, az = np.radians(rng.uniform(*lit.sun_elevation_deg)), np.radians(rng.uniform(*lit.sun_azimuth_deg))
         direction = [float(np.cos(el) * np.sin(az)), float(np.sin(el)), float(np.cos(el) * np.cos(az))]
-        return {"type": "sunsky", "sun_direction": direction, "turbidity": float(rng.uniform(*lit.turbidity))}
-    return {"type": "envmap", "file": os.path.relpath(os.path.join(os.path.dirname(env.path), str(lit.file)), SCENES_DIR),
-            "scale": float(rng.uniform(*lit.scale)), "rotation_deg": float(rng.uniform(*lit.rotation_deg))}
-
-
-def lighting_emitter(lighting: dict):
-    if lighting["type"] == "sunsky":
-        return SunSky(sun_direction=tuple(lighting["sun_direction"]), turbidity=lighting["turbidity"])
-    return EnvMap(source=os.path.join(SCENES_DIR, lighting["file"]), scale=lighting["scale"],
-                  rotation_deg=lighting["rotation_deg"])
+        return SunskyLighting(direction, float(rng.uniform(*lit.turbidity)))
+    return EnvmapLighting(os.path.relpath(os.path.join(os.path.dirname(env.path), str(lit.file)), SCENES_DIR),
+                          float(rng.uniform(*lit.scale)), float(rng.uniform(*lit.rotation_deg)))
 
 
 # -- ground -------------------------------------------------------------------------------
@@ -253,7 +290,8 @@ def object_boxes(env: Environment) -> np.ndarray:
     return np.asarray(boxes, np.float64).reshape(-1, 6)
 
 
-def add_environment(scene, env: Environment, lighting: dict, rng: np.random.Generator) -> None:
+def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLighting,
+                    rng: np.random.Generator) -> None:
     """Ground, objects (instances 2, 3, ...) and ``lighting`` (from ``sample_lighting``)."""
     add_ground(scene, env.ground, rng)
     for i, obj in enumerate(env.objects):
@@ -261,4 +299,4 @@ def add_environment(scene, env: Environment, lighting: dict, rng: np.random.Gene
             mat = Material(base_color=colour, kind="principled", roughness=obj.roughness)
             scene.add_mesh(f"object{i}_{obj.kind}_{k}", mesh.vertices, mesh.faces, material=mat,
                            instance=OBJECT_INSTANCE + i, layer=int(Layer.OBJECT))
-    scene.set_environment(lighting_emitter(lighting))
+    scene.set_environment(lighting.emitter())

@@ -278,7 +278,7 @@ def scene_spec(doc: SceneDoc | str, path: str, rng: np.random.Generator, seed: i
     path = os.path.abspath(path)
     subjects, humans = subject_specs(doc.subjects, rng, set(doc.object_instances()), os.path.dirname(path), doc.clip)
     n_frames = len(subjects[0].frames) if subjects else max(1, int(round(doc.clip.seconds * doc.clip.fps)))
-    spec_ = SceneSpec(path, {}, 0, subjects, [], n_frames, doc.clip.fps, [], seed, stage="scene_file")
+    spec_ = SceneSpec(path, None, 0, subjects, [], n_frames, doc.clip.fps, [], seed, stage="scene_file")
     scene, placed = spec_.build(humans)
     cams, cfg = _cameras(doc), CameraConfig()
     frames = sorted({int(round(x)) for x in np.linspace(0, n_frames - 1, min(cfg.score_frames, n_frames))})

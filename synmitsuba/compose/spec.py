@@ -15,7 +15,8 @@ from typing import Callable
 import numpy as np
 
 
-from synmitsuba.compose.environments import SCENES_DIR, add_environment, load_environment
+from synmitsuba.compose.environments import (SCENES_DIR, EnvmapLighting, SunskyLighting, add_environment,
+                                             lighting_from_dict, lighting_to_dict, load_environment)
 from synmitsuba.compose.subjects import PlacedSubject, SubjectSpec, placed_subject
 from synmitsuba.errors import ConfigError
 from synmitsuba.scene.camera import Camera
@@ -49,7 +50,7 @@ class SceneSpec:
     """A composed scene; ``build()`` gives the ``Scene`` and its posable subjects."""
 
     environment: str           # stage "environment": a name in scenes/environments or a path; "scene_file": its path
-    lighting: dict             # from environments.sample_lighting
+    lighting: SunskyLighting | EnvmapLighting | None  # environments.sample_lighting's draw (None: a scene file's own)
     ground_seed: int
     subjects: list             # SubjectSpec
     views: list                # ViewSpec
@@ -65,7 +66,7 @@ class SceneSpec:
     def to_json(self, indent: int | None = None) -> str:
         stage = {} if self.stage == "environment" else {"stage": self.stage}
         return json.dumps({"format": FORMAT, "seed": self.seed, **stage, "environment": self.environment,
-                           "lighting": self.lighting, "ground_seed": int(self.ground_seed),
+                           "lighting": lighting_to_dict(self.lighting), "ground_seed": int(self.ground_seed),
                            "n_frames": int(self.n_frames), "fps": float(self.fps),
                            "scored_frames": [int(f) for f in self.scored_frames], "config": self.config,
                            "subjects": [s.to_dict() for s in self.subjects],
@@ -76,7 +77,8 @@ class SceneSpec:
         d = json.loads(text)
         if d.get("format") != FORMAT:
             raise ConfigError("scene spec format", d.get("format"), f"this synmitsuba reads {FORMAT}")
-        return cls(d["environment"], d["lighting"], d["ground_seed"], [SubjectSpec.from_dict(s) for s in d["subjects"]],
+        return cls(d["environment"], lighting_from_dict(d["lighting"]), d["ground_seed"],
+                   [SubjectSpec.from_dict(s) for s in d["subjects"]],
                    [ViewSpec.from_dict(v) for v in d["views"]], d["n_frames"], d["fps"], d["scored_frames"],
                    d.get("seed"), d.get("config", {}), d.get("stage", "environment"))
 
@@ -114,6 +116,8 @@ class SceneSpec:
 def _environment_stage(spec: SceneSpec) -> Scene:
     """A composed scene's environment: ground, objects and the drawn lighting."""
     scene = Scene()
+    if spec.lighting is None:
+        raise ConfigError("scene spec lighting", None, "a composed scene needs its drawn lighting")
     add_environment(scene, load_environment(spec.environment), spec.lighting, np.random.default_rng(spec.ground_seed))
     return scene
 
