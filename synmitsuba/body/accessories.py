@@ -3,6 +3,7 @@ skinned with the weights of their nearest body vertex."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -390,8 +391,37 @@ def _tube(points: np.ndarray, radius: float, sections: int = 6, across=(1.0, 0.0
 
 # kind -> builder(params, rest body, head {centre, radii (right, up, forward), up, forward, mask (its body
 # vertices), eyes and ears (2, 3): left, right keypoints; nose (3,); chin: ``under_chin``}) -> (V, F)
+def _uncapped(head: HeadFrame, hair) -> np.ndarray:
+    """No strand grows through a cap's crown."""
+    return ~under_cap(head, hair.points[:, 0])
+
+
+def _unmasked(head: HeadFrame, hair) -> np.ndarray:
+    """No beard strand (scalp regions are 0-4) grows through a face mask."""
+    return ~((hair.region >= 5) & mask_covers(head, hair.points[:, 0]))
+
+
+@dataclass(frozen=True)
+class AccessoryKind:
+    """Everything an accessory kind is: ``build(params, body, head) -> (vertices, faces)`` on the
+    rest body; its ``metallic``; ``fabric_uv(head, vertices) -> (uv, (metres per u, per v))`` for
+    matte cloth with a plain weave at thread size; ``keeps_hair(head, strands)``: the strands
+    it leaves (None: all)."""
+
+    build: Callable
+    metallic: float = 0.0
+    fabric_uv: Callable | None = None
+    keeps_hair: Callable | None = None
+
+
+# One entry per kind: a new accessory is one builder and one line here (and, to be sampled, a name in KINDS).
+ACCESSORIES: dict[str, AccessoryKind] = {
+    "glasses": AccessoryKind(_glasses), "cap": AccessoryKind(_cap, keeps_hair=_uncapped),
+    "headphones": AccessoryKind(_headphones), "backpack": AccessoryKind(_backpack),
+    "watch": AccessoryKind(_watch, metallic=0.8), "mask": AccessoryKind(_mask, fabric_uv=mask_uv, keeps_hair=_unmasked),
+}
 BUILDERS = BUILDERS_BY_NAME
-BUILDERS.update(glasses=_glasses, cap=_cap, headphones=_headphones, backpack=_backpack, watch=_watch, mask=_mask)
+BUILDERS.update({kind: a.build for kind, a in ACCESSORIES.items()})
 
 
 def build_accessory(p: AccessoryParams, body, head) -> tuple[np.ndarray, np.ndarray]:

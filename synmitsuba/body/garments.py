@@ -108,6 +108,10 @@ class GarmentKind:
     ease: tuple[float, float] = (0.0, 0.015)
     thickness: tuple[float, float] = (0.002, 0.006)
     fabric: str = "plain"         # textures.FABRICS: the thread-scale normal map a texture's weave "auto" takes
+    footwear: bool = False        # under the feet: lifts the body by its offset, outside the stack of clothes
+    skirted: bool = False         # a skirt or a dress (rare in men's sampled outfits)
+    tucks_tops: bool = False      # tops worn with it end tucked under the waist
+    takes_jacket: bool = True     # a sampled jacket may go over it
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
@@ -122,10 +126,11 @@ GARMENTS: dict[str, GarmentKind] = {
                             fabric="twill"),
     "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
                               fabric="twill"),
-    "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03)),
+    "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
+                         tucks_tops=True),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
-                         (0.005, 0.03)),
-    "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none"),
+                         (0.005, 0.03), skirted=True, takes_jacket=False),
+    "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none", footwear=True),
 }
 KINDS = tuple(GARMENTS)
 # outfits sample_subject draws from (a jacket and shoes are added by chance)
@@ -319,13 +324,14 @@ class GarmentShape:
 
     build: Callable
     hemmed: bool = True
+    spans_legs: bool = False  # hangs across both legs: skinned to both, not bound to the nearer
 
 
 # A new garment shape is one entry here; GarmentKind.shape names one.
 GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell": GarmentShape(_shell_shape),
-    "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y)),
-    "shell+flare": GarmentShape(_dress_shape),
+    "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y), spans_legs=True),
+    "shell+flare": GarmentShape(_dress_shape, spans_legs=True),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
 }
 
@@ -333,7 +339,7 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
 def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0,
                   tuck: bool = False) -> GarmentMesh:
     """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology.
-    ``tuck``: a top worn with a skirt ends ``TUCK`` under the waist, as if tucked in (its hem
+    ``tuck``: a top worn with a skirt (a kind that ``tucks_tops``) ends ``TUCK`` under the waist, as if tucked in (its hem
     would otherwise run inside the skirt's flare and show through it in notches)."""
     kind = GARMENTS[g.kind]
     offset = garment_offset(g, below)

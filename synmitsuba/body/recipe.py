@@ -151,7 +151,7 @@ def sample_phenotypes(rng: np.random.Generator, fixed: dict | None = None, years
 
 def outfit_weights(gender: float) -> np.ndarray:
     """Probabilities of ``OUTFITS``: equal for women; skirts and dresses rare (3 % in all) for men."""
-    skirted = np.array([bool({"skirt", "dress"} & set(o)) for o in OUTFITS])
+    skirted = np.array([any(GARMENTS[k].skirted for k in o) for o in OUTFITS])
     w = np.where(skirted, 1.0 if gender >= 0.5 else 0.03 * (~skirted).sum() / skirted.sum() / 0.97, 1.0)
     return w / w.sum()
 
@@ -164,10 +164,11 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     pheno = sample_phenotypes(rng, cfg.phenotypes, cfg.age_years)
     outfit = list(cfg.outfit or OUTFITS[int(rng.choice(len(OUTFITS), p=outfit_weights(pheno["gender"])))])
     draw = rng.random() < 0.25  # drawn even when fixed, so fixing one choice keeps the others
-    if (draw if cfg.jacket is None else cfg.jacket) and "dress" not in outfit and "jacket" not in outfit:
+    if (draw if cfg.jacket is None else cfg.jacket) and all(GARMENTS[k].takes_jacket for k in outfit) \
+            and "jacket" not in outfit:
         outfit.append("jacket")
     draw = rng.random() < 0.85
-    if (draw if cfg.shoes is None else cfg.shoes) and "shoes" not in outfit:
+    if (draw if cfg.shoes is None else cfg.shoes) and not any(GARMENTS[k].footwear for k in outfit):
         outfit.append("shoes")
     garments = [sample_garment(k, rng) for k in outfit]
     anny_anchors, year_anchors = shape_calibration()["age"]

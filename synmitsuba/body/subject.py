@@ -13,8 +13,8 @@ from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
-from synmitsuba.body.garments import (GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights, build_garment,
-                                      garment_offset, metres_per_uv)
+from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
+                                      build_garment, garment_offset, metres_per_uv)
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
@@ -91,7 +91,7 @@ class LayeredHuman:
         self.recipe = recipe
         body = anny_body(recipe.phenotypes)
         self.regions: BodyRegions = body_regions(body)
-        shoes = [g for g in recipe.garments if g.kind == "shoes"]
+        shoes = [g for g in recipe.garments if GARMENTS[g.kind].footwear]
         lift = garment_offset(shoes[0]) if shoes else 0.0  # the shoe soles stand on the ground
         body.vertices = body.vertices + [0, lift, 0]
         body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
@@ -107,23 +107,26 @@ class LayeredHuman:
                                          body.weights[self.split.source])]
         self.garments: list[GarmentMesh] = []
         below = 0.0
+        tuck = any(GARMENTS[x.kind].tucks_tops for x in recipe.garments)
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
-            m = build_garment(body, self.regions, self.split, g, below if g.kind != "shoes" else 0.0,
-                              tuck=any(x.kind == "skirt" for x in recipe.garments))
-            if g.kind != "shoes":
+            footwear = GARMENTS[g.kind].footwear
+            m = build_garment(body, self.regions, self.split, g, 0.0 if footwear else below, tuck=tuck)
+            if not footwear:
                 below = max(below, m.offset)
             self.garments.append(m)
             b = bind(body.vertices, body.faces, body.weights, m.vertices, body.surface())
             kind = GARMENTS[g.kind]
-            weights = both_legs_weights(body, self.regions, m.vertices, b.weights) if "flare" in kind.shape else b.weights
+            spans = GARMENT_SHAPES[kind.shape].spans_legs
+            weights = both_legs_weights(body, self.regions, m.vertices, b.weights) if spans else b.weights
             material = garment_material(g.texture, size, fabric=kind.fabric,
                                         metres_per_uv=metres_per_uv(m.vertices, m.faces, m.uv))
             collider = GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset), body.faces[b.triangle],
                                        b.barycentric)
             self.parts.append(_Part(g.kind, m.layer, material, m.vertices, m.faces, m.uv, weights, collider))
         garments = self.parts[1:]
+        clothes = [not GARMENTS[p.name].footwear for p in garments]
         for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
-            part.inner = part.name != "shoes" and any(q.name != "shoes" for q in garments[k + 1:])
+            part.inner = clothes[k] and any(clothes[k + 1:])
         self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
         self._build_accessories()
@@ -157,7 +160,8 @@ class LayeredHuman:
         surface = Surface.of(body.vertices, body.faces, self._incidence)
         reachable = np.linalg.norm(body.vertices - centre, axis=1) < (hi - lo).max() / 2 + reach(self.recipe.hair)
         self.hair_lift = cover_heights(body.vertices, surface.normals,
-                                       [(p.rest, p.faces) for p in self.parts[1:] if p.name != "shoes"], reachable)
+                                       [(p.rest, p.faces) for p in self.parts[1:]
+                                        if p.name in GARMENTS and not GARMENTS[p.name].footwear], reachable)
         self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head.ears)
         self.head_bone = sk.index("head")
 
@@ -168,21 +172,18 @@ class LayeredHuman:
             v, f = acc.build_accessory(p, self.body, self.head)
             _, near = tree.query(v)
             colour = lab_to_linear_rgb(p.colour_lab) if p.colour_lab else (0.1, 0.1, 0.1)
-            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4,
-                           metallic=0.0 if p.kind != "watch" else 0.8)
+            kind = acc.ACCESSORIES[p.kind]
+            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4, metallic=kind.metallic)
             uv = None
-            if p.kind == "mask":  # matte cloth with a plain weave at thread size
-                uv, metres = acc.mask_uv(self.head, v)
+            if kind.fabric_uv is not None:  # matte cloth with a plain weave at thread size
+                uv, metres = kind.fabric_uv(self.head, v)
                 mat = dataclasses.replace(mat, roughness=0.9, normal_map=fabric_normal_map("plain"),
                                           normal_map_repeat=fabric_repeat("plain", metres))
             n = sum(q.kind == p.kind for q in self.recipe.accessories[:i])  # a second watch is watch_2
             self.parts.append(_Part(p.kind if n == 0 else f"{p.kind}_{n + 1}", acc.LAYER, mat, v, f, uv,
                                     self.body.weights[near]))
-            if p.kind == "cap" and len(self.hair):  # no strand grows through the crown
-                self.hair = self.hair.subset(~acc.under_cap(self.head, self.hair.points[:, 0]))
-            if p.kind == "mask" and len(self.hair):  # nor a beard through a face mask
-                beard = self.hair.region >= 5  # (scalp regions are 0-4)
-                self.hair = self.hair.subset(~(beard & acc.mask_covers(self.head, self.hair.points[:, 0])))
+            if kind.keeps_hair is not None and len(self.hair):  # no strand grows through a cap or a mask
+                self.hair = self.hair.subset(kind.keeps_hair(self.head, self.hair))
 
     def _hair_weights(self):
         """The strands' skinning weights (``hair.follow_weights``): nearest body vertex's below the neck."""
