@@ -349,7 +349,7 @@ def test_hair_stays_outside_the_body(human):
     body = human.body
     surface = Surface.of(body.vertices, body.faces, human._incidence)
     for style in ("short", "bob", "long", "afro"):
-        s = grow_hair(HairParams(style=style, beard="full", seed=1), human.scalp, surface, human.head["ears"])
+        s = grow_hair(HairParams(style=style, beard="full", seed=1), human.scalp, surface, human.head.ears)
         d = signed_distance(body.vertices, body.faces, s.points[:, 1:].reshape(-1, 3))
         assert (d < 0).mean() < 0.002, (style, (d < 0).mean())
 
@@ -459,11 +459,11 @@ def test_scalp_under_hair_takes_the_hair_colour(human):
         corners = np.isin(body.faces, vertices)
         t = body.uv[body.face_uv[corners]]
         return tex[np.clip(((1 - t[:, 1]) * size).astype(int), 0, size - 1), np.clip((t[:, 0] * size).astype(int), 0, size - 1)]
-    crown = np.flatnonzero(human.head["mask"] & (body.vertices[:, 1] > human.head["centre"][1] + 0.07))
+    crown = np.flatnonzero(human.head.mask & (body.vertices[:, 1] > human.head.centre[1] + 0.07))
     skin = lab_to_linear_rgb(human.recipe.skin.lab())
     hair = (1 - SCALP_TINT) * skin + SCALP_TINT * hair_colour(human.recipe.hair)
     assert np.median(np.abs(texels(crown) - hair).max(1)) < 0.05
-    nose = np.argmin(np.linalg.norm(body.vertices - human.head["nose"], axis=1))
+    nose = np.argmin(np.linalg.norm(body.vertices - human.head.nose, axis=1))
     assert np.abs(texels([nose]) - hair).max() > 0.1
 
 
@@ -803,10 +803,10 @@ def test_cap_crown_ends_on_its_edge_line_and_the_bill_is_a_peak():
     from synmitsuba.geometry import frame
     h = sm.build_subject(sm.sample_subject(np.random.default_rng(3), {"accessories": ["cap"], "texture_size": 64}))
     part = next(p for p in h.parts if p.name == "cap")
-    R, c = frame(h.head["forward"], h.head["up"]), h.head["centre"]
+    R, c = frame(h.head.forward, h.head.up), h.head.centre
     v = (part.rest - c) @ R
-    eyes = ((h.head["eyes"] - c) @ R).mean(0)
-    head = (h.body.vertices[h.head["mask"]] - c) @ R
+    eyes = ((h.head.eyes - c) @ R).mean(0)
+    head = (h.body.vertices[h.head.mask] - c) @ R
     brow = head[np.abs(head[:, 1] - eyes[1] - 0.03) < 0.01]
     bill = v[:, 2] > brow[:, 2].max() + 0.012
     edges = np.sort(np.concatenate([part.faces[:, [0, 1]], part.faces[:, [1, 2]], part.faces[:, [2, 0]]]), 1)
@@ -865,9 +865,9 @@ def test_mask_covers_nose_and_mouth_and_headphones_sit_on_the_ears(seed):
         side = phones[np.sign(phones[:, 0]) == np.sign(ear[0])]
         cup = side[np.abs(side[:, 1] - ear[1]) < 0.03]
         assert np.linalg.norm(cup.mean(0)[[1, 2]] - ear[[1, 2]]) < 0.03
-    top = h.body.vertices[h.head["mask"], 1].max()
+    top = h.body.vertices[h.head.mask, 1].max()
     above = phones[phones[:, 1] > top]
-    assert len(above) and np.abs(above[:, 2] - h.head["centre"][2]).max() < 0.03  # over the crown
+    assert len(above) and np.abs(above[:, 2] - h.head.centre[2]).max() < 0.03  # over the crown
     assert phones[:, 2].max() < nose[2] - 0.02  # nothing in front of the face
 
 
