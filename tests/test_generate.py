@@ -90,6 +90,24 @@ def test_bad_output_and_config_fail_before_any_work(tmp_path):
     assert run.returncode == 2 and "compose.cameras.coutn" in run.stderr and not (tmp_path / "o" / "seq_000000").exists()
 
 
+@pytest.mark.parametrize("setting, named", [
+    ("compose.environments=[plaza, moon]", "compose.environments[1] = 'moon': no such environment"),
+    ("compose.subjects.motions=[walk, moonwalk]", "compose.subjects.motions[1] = 'moonwalk'"),
+    ("compose.subjects.motions=[no/such.bvh]", "compose.subjects.motions[0] = 'no/such.bvh': no such file"),
+    ("scene=no_such.yaml", "scene = "),
+])
+def test_names_and_files_a_worker_would_use_are_checked_before_any_work(tmp_path, setting, named):
+    """A bad environment, motion or scene file is one line naming its key, exit 2, before the
+    output folder exists (it used to fail in every worker: "a worker died", nothing logged)."""
+    import time
+    t0 = time.perf_counter()
+    run = _generate(tmp_path / "o", "--set", setting)
+    assert run.returncode == 2 and not (tmp_path / "o").exists(), run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and named in lines[0], run.stderr
+    assert time.perf_counter() - t0 < 20  # no subject was built
+
+
 def test_dataset_reads_images_and_person_crops_with_workers(sm, tiny):
     import torch
     ds = sm.SynDataset(tiny, modalities=["rgb", "depth", "instance"])

@@ -41,20 +41,26 @@ class ComposeConfig(Params):
     base: str = spec("", doc="folder relative motion paths start from (a config file's own)")
 
 
-def _motion_sources(cfg: SubjectsConfig, base: str) -> list[str]:
-    """Motion entries with folders expanded into their files (sorted: the same on every machine)."""
-    from synmitsuba.motion.sources import motion_files
-    out = []
-    for i, m in enumerate(cfg.motions):
-        path = os.path.join(base, m)
+def checked_sources(cfg: ComposeConfig, where: str = "") -> tuple[list, list[str]]:
+    """The config's environments, loaded, and its motion sources with folders expanded into
+    their files (sorted: the same on every machine); every name and file is checked, and errors
+    name the key path under ``where`` (``compose.environments[0]``), so a run can check them
+    all before any work starts."""
+    from synmitsuba.motion.sources import check_motion_source, motion_files
+    at = f"{where}." if where else ""
+    envs = [load_environment(n, f"{at}environments[{i}]") for i, n in enumerate(cfg.environments)]
+    sources = []
+    for i, m in enumerate(cfg.subjects.motions):
+        path, key = os.path.join(cfg.base, m), f"{at}subjects.motions[{i}]"
         if os.path.isdir(path):
             files = motion_files(path)
             if not files:
-                raise ConfigError(f"subjects.motions[{i}]", m, "the folder holds no .bvh or .npz files")
-            out += files
+                raise ConfigError(key, m, "the folder holds no .bvh or .npz files")
+            sources += files
         else:
-            out.append(m)
-    return out
+            check_motion_source(m, cfg.base, key)
+            sources.append(m)
+    return envs, sources
 
 
 def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
@@ -85,13 +91,12 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     cfg = config if isinstance(config, ComposeConfig) else ComposeConfig.from_dict(config, "")
     if not isinstance(rng, np.random.Generator):
         raise ConfigError("rng", type(rng).__name__, "give a numpy.random.Generator (np.random.default_rng(seed))")
-    envs = [load_environment(n, f"environments[{i}]") for i, n in enumerate(cfg.environments)]  # all checked
+    envs, sources = checked_sources(cfg)  # every name checked before anything is drawn
     pick = int(rng.integers(len(envs)))
     name, env = cfg.environments[pick], envs[pick]
     lighting, ground_seed = sample_lighting(env, rng), int(rng.integers(2 ** 31))
     sc = cfg.subjects
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
-    sources = _motion_sources(sc, cfg.base)
     drafts = [_draft(sc, sources, cfg.base, i, rng) for i in range(count)]
     boxes = object_boxes(env)
     placements = place_subjects([d.hulls for d in drafts], env.area, boxes[:, [0, 2, 3, 5]], cfg.placement, rng)

@@ -161,6 +161,17 @@ def check_output(out: str) -> str:
     return out
 
 
+def check_config(config: GenerateConfig) -> None:
+    """Every name and file the config uses (environments, motions, a scene file), checked in
+    this process before any task starts: a worker would only report it after its own setup."""
+    if config.scene is not None:
+        from synmitsuba.compose.scenefile import check_scene_file
+        check_scene_file(config.scene, "scene")
+    else:
+        from synmitsuba.compose.composition import checked_sources
+        checked_sources(config.compose, "compose")
+
+
 def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str = "local", ray_address: str | None = None,
              max_failures: int = 2, progress: bool = True, task: Callable | None = None) -> Summary:
     """Render every sequence of ``config`` not yet in ``out``'s manifest; retry a failing one up to
@@ -170,10 +181,8 @@ def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str =
     top-level function, so spawned workers can import it)."""
     if executor not in EXECUTORS:
         raise ConfigError("--executor", executor, f"use one of {', '.join(EXECUTORS)}")
+    check_config(config)
     out = check_output(out)
-    if config.scene is not None:
-        from synmitsuba.compose.scenefile import check_scene_file
-        check_scene_file(config.scene, "scene")
     for name in os.listdir(out):
         if name.endswith(".partial"):
             shutil.rmtree(os.path.join(out, name), ignore_errors=True)

@@ -43,7 +43,8 @@ def check_motion_source(source: str, base: str = "", field: str = "motion") -> t
         raise ConfigError(field, exc.value, exc.fix) from None
     path = "" if kind == "procedural" else os.path.join(base, os.fspath(source))
     if path and not os.path.isfile(path):
-        raise ConfigError(field, source, f"no such file ({path})" + ("; paths are relative to the scene file" if base else ""))
+        where = "; relative paths start at the folder of the file that names them" if base else ""
+        raise ConfigError(field, source, f"no such file ({path}){where}")
     return kind, path
 
 
