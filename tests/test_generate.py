@@ -56,6 +56,28 @@ def test_rerun_skips_complete_and_redoes_partial_sequences(tiny, tmp_path):
     assert _files(out)["seq_000001/f0000_cam0.exr"] == _files(tiny)["seq_000001/f0000_cam0.exr"]
 
 
+def test_a_rerun_with_other_settings_is_refused_naming_them(tiny, tmp_path):
+    """A rerun into a dataset made with other settings used to report "2 skipped" and then mix
+    spp-4 and spp-16 sequences; now config.json names what differs and the run is refused
+    (more sequences, or --allow-config-change, go on)."""
+    import shutil
+    out = tmp_path / "more"
+    shutil.copytree(tiny, out)
+    record = json.loads((out / "config.json").read_text())
+    assert record["config"]["render"]["spp"] == json.loads((tiny / "config.json").read_text())["config"]["render"]["spp"]
+    assert record["synmitsuba"] == __import__("synmitsuba").__version__
+    run = _generate(out, "--set", "render.spp=16", "--set", "compose.cameras.width=200")
+    err = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(err) == 1, run.stderr
+    assert f"render.spp: {record['config']['render']['spp']!r} -> 16" in err[0] and "compose.cameras.width" in err[0]
+    assert "--allow-config-change" in err[0] and sorted(p.name for p in out.iterdir()) == sorted(p.name for p in tiny.iterdir())
+    run = _generate(out, "--set", "render.spp=16", "--allow-config-change", "--sequences", "3")
+    assert run.returncode == 0 and "1 done, 2 skipped" in run.stdout, run.stderr
+    log = [json.loads(x) for x in (out / "run.log").read_text().splitlines()]
+    assert any("render.spp" in " ".join(e.get("config_changed", [])) for e in log)
+    assert json.loads((out / "config.json").read_text()) == record  # the dataset's own settings stay recorded
+
+
 def test_a_killed_worker_loses_and_duplicates_nothing(tmp_path):
     out = tmp_path / "kill"
     proc = subprocess.Popen([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",

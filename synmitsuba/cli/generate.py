@@ -17,7 +17,8 @@ def run(args) -> int:
         overrides.append(f"seed={args.seed}")
     cfg = load_generate_config(args.config, overrides)  # every key checked before any work
     summary = generate(cfg, args.out, workers=args.workers, executor=args.executor, ray_address=args.ray_address,
-                       max_failures=args.max_failures, progress=not args.quiet)
+                       max_failures=args.max_failures, progress=not args.quiet,
+                       allow_config_change=args.allow_config_change)
     print(f"{args.out}: {summary.line()}")
     for i, err in sorted(summary.failed.items()):
         print(f"  sequence {i} failed: {err}")
@@ -42,5 +43,7 @@ def add_parser(sub) -> None:
     p.add_argument("--max-failures", type=natural_int, default=2, help="retries of a failing sequence before it is reported")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config value, e.g. render.spp=16 "
                    "(repeatable; default: the config as written)")
+    p.add_argument("--allow-config-change", action="store_true", help="add sequences to a dataset made with other "
+                   "settings (default: refused, naming what differs from DIR/config.json)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

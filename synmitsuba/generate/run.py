@@ -20,6 +20,7 @@ from typing import Callable
 from synmitsuba.errors import ConfigError
 from synmitsuba.generate.config import GenerateConfig
 from synmitsuba.generate.executors import EXECUTORS, Failure
+from synmitsuba.io.files import atomic_path
 from synmitsuba.seeds import render_seed, sequence_rng
 
 
@@ -172,8 +173,56 @@ def check_config(config: GenerateConfig) -> None:
         checked_sources(config.compose, "compose")
 
 
+RUN_FILE = "config.json"
+UNCOMPARED = ("sequences", "compose.base")  # more sequences extend a dataset; a checkout's own path is not a setting
+
+
+def _flat(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, dict) and v:
+            out.update(_flat(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def config_record(config: GenerateConfig) -> dict:
+    """What ``OUT/config.json`` holds: the resolved config and the package version."""
+    from synmitsuba import __version__
+    return {"synmitsuba": __version__, "config": config.to_dict()}
+
+
+def config_changes(old: dict, new: dict) -> list[str]:
+    """``key: old -> new`` for every setting (and the version) that differs, but ``UNCOMPARED``."""
+    a = {"synmitsuba": old.get("synmitsuba"), **_flat(old.get("config", {}))}
+    b = {"synmitsuba": new["synmitsuba"], **_flat(new["config"])}
+    return [f"{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a) | set(b))
+            if k not in UNCOMPARED and a.get(k) != b.get(k)]
+
+
+def _check_run_config(out: str, config: GenerateConfig, allow_change: bool) -> None:
+    """Record the config of a new dataset; refuse to add to one made with other settings (its
+    sequences would silently mix them) unless ``allow_change``."""
+    path, record = os.path.join(out, RUN_FILE), json.loads(json.dumps(config_record(config)))
+    if not os.path.isfile(path):
+        with atomic_path(path) as tmp, open(tmp, "w") as fh:
+            json.dump(record, fh, indent=1, sort_keys=True)
+        return
+    with open(path) as fh:
+        changes = config_changes(json.load(fh), record)
+    if changes and not allow_change:
+        shown = "; ".join(changes[:4]) + (f"; and {len(changes) - 4} more" if len(changes) > 4 else "")
+        raise ConfigError("--out", out, f"holds a dataset made with other settings ({shown}); use another --out, or "
+                          "--allow-config-change to add sequences made with these")
+    if changes:
+        with open(os.path.join(out, "run.log"), "a") as fh:
+            fh.write(json.dumps({"config_changed": changes, "host": socket.gethostname()}) + "\n")
+
+
 def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str = "local", ray_address: str | None = None,
-             max_failures: int = 2, progress: bool = True, task: Callable | None = None) -> Summary:
+             max_failures: int = 2, progress: bool = True, task: Callable | None = None,
+             allow_config_change: bool = False) -> Summary:
     """Render every sequence of ``config`` not yet in ``out``'s manifest; retry a failing one up to
     ``max_failures`` times, then report it (never dropped silently). Every failure's traceback
     goes to ``run.log``; ``Summary.failed`` keeps its one-line summary. ``executor`` names one
@@ -183,6 +232,7 @@ def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str =
         raise ConfigError("--executor", executor, f"use one of {', '.join(EXECUTORS)}")
     check_config(config)
     out = check_output(out)
+    _check_run_config(out, config, allow_config_change)
     for name in os.listdir(out):
         if name.endswith(".partial"):
             shutil.rmtree(os.path.join(out, name), ignore_errors=True)
