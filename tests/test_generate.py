@@ -204,3 +204,46 @@ def test_failures_are_logged_with_tracebacks_and_charged_to_their_own_sequence(t
     assert all(e["worker_died"] for e in failures if e["sequence"] == 4)
     assert sorted(e["sequence"] for e in log if "seconds" in e) == [0, 2, 3, 5]  # each finished exactly once
 
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                with open(f"/proc/{d}/stat") as fh:
+                    if int(fh.read().rsplit(")", 1)[1].split()[1]) == pid:
+                        out.append(int(d))
+            except (OSError, IndexError, ValueError):
+                pass
+    return out
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads /proc")
+def test_ctrl_c_stops_every_worker_and_keeps_only_complete_sequences(tmp_path):
+    """SIGINT to `generate --workers 2` (as `timeout -s INT` sends it, to the parent alone): one
+    line, exit 130, both workers gone within seconds, no .partial folder, every sequence folder
+    in the manifest. Workers used to live on, write a sequence 15-22 s later, then block."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "o"
+    with open(tmp_path / "stdout", "w") as so, open(tmp_path / "stderr", "w") as se:
+        p = subprocess.Popen([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",
+                              "--workers", "2", "--sequences", "6", "--set", "frames=2"], stdout=so, stderr=se)
+        t0, workers = time.time(), []
+        while time.time() - t0 < 120 and len(workers) < 2:  # both workers started (and rendering soon)
+            workers = [c for c in _children(p.pid) if "spawn_main" in open(f"/proc/{c}/cmdline").read()]
+            time.sleep(0.2)
+        time.sleep(4)
+        p.send_signal(signal.SIGINT)
+        assert p.wait(30) == 130
+    time.sleep(3)
+    assert workers and not [w for w in workers if os.path.exists(f"/proc/{w}")], "workers outlived the run"
+    err = (tmp_path / "stderr").read_text().strip().splitlines()
+    assert err == ["synmitsuba generate: interrupted; files already written are complete, nothing half-written was kept"]
+    listed = {json.loads(x)["folder"] for x in (out / "manifest.jsonl").read_text().splitlines()} \
+        if (out / "manifest.jsonl").exists() else set()
+    seqs = {d.name for d in out.iterdir() if d.name.startswith("seq_")}
+    assert seqs <= listed, seqs - listed

@@ -63,6 +63,22 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _stop_children() -> None:
+    """Kill this process's worker processes (a generation's pool) and reap them."""
+    import multiprocessing
+    children = multiprocessing.active_children()
+    for p in children:
+        p.kill()
+    for p in children:
+        p.join(5)
+    if children:  # their queues' named semaphores: unlinked now, as a normal exit would (else the tracker warns)
+        from multiprocessing import util
+        try:
+            util._run_finalizers(0)
+        except Exception:  # noqa: BLE001 - best effort on the way out
+            pass
+
+
 def _exit_on_interrupt(prog: str) -> Callable[[], None]:
     """Ctrl-C: remove the temporaries being written, say so on one line, exit 130 at once.
 
@@ -74,6 +90,7 @@ def _exit_on_interrupt(prog: str) -> Callable[[], None]:
     message = f"{prog}: interrupted; files already written are complete, nothing half-written was kept\n"
 
     def handler(signum, frame):
+        _stop_children()  # first: a worker left running would write on after we exit
         remove_temporaries()
         sys.stdout.flush()
         os.write(terminal, message.encode())

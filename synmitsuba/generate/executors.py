@@ -46,10 +46,27 @@ def _died(index: int, why: str) -> Outcome:
     return Outcome(index, failure=Failure(index, f"a worker died ({why})", "", worker_died=True))
 
 
-def worker_setup(threads: int) -> None:
-    """A worker process owns itself: opt into the process settings, size drjit's threads."""
+def worker_setup(threads: int, parent: int | None = None) -> None:
+    """A worker process owns itself: opt into the process settings, size drjit's threads. It
+    leaves Ctrl-C to the parent (which stops it) and, on Linux, dies with the parent: a worker
+    orphaned by a killed parent would otherwise render on and write after the run ended."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent(parent)
     configure_process()
     os.environ["SYNMITSUBA_THREADS"] = str(threads)
+
+
+def _die_with_parent(parent: int | None) -> None:
+    import sys
+    if parent is None or not sys.platform.startswith("linux"):
+        return
+    import ctypes
+    import signal
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    if os.getppid() != parent:  # the parent was gone before the request took hold
+        os._exit(1)
 
 
 class Executor(Protocol):
@@ -79,7 +96,7 @@ class LocalPool:
         from concurrent.futures import ProcessPoolExecutor
         if self.pool is None:
             self.pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=mp.get_context("spawn"),
-                                            initializer=worker_setup, initargs=(self.threads,))
+                                            initializer=worker_setup, initargs=(self.threads, os.getpid()))
         return self.pool
 
     def _fill(self) -> None:

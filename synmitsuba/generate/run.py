@@ -20,7 +20,7 @@ from typing import Callable
 from synmitsuba.errors import ConfigError
 from synmitsuba.generate.config import GenerateConfig
 from synmitsuba.generate.executors import EXECUTORS, Failure
-from synmitsuba.io.files import atomic_path
+from synmitsuba.io.files import ACTIVE_TEMPORARIES, atomic_path
 from synmitsuba.seeds import render_seed, sequence_rng
 
 
@@ -241,11 +241,14 @@ def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str =
     todo = [i for i in range(config.sequences) if i not in done]
     summary = Summary(skipped=sorted(i for i in done if i < config.sequences))
     t0 = time.perf_counter()
+    partial = {os.path.join(out, f"seq_{i:06d}.partial") for i in todo}
+    ACTIVE_TEMPORARIES.update(partial)  # removed if the run is interrupted (after its workers are stopped)
     pool = EXECUTORS[executor](task or run_sequence, config.to_dict(), out, workers, ray_address)
     try:
         _drive(pool, todo, out, max_failures, summary, progress)
     finally:
         pool.close()
+        ACTIVE_TEMPORARIES.difference_update(partial)
     summary.seconds = time.perf_counter() - t0
     return summary
 

@@ -25,8 +25,12 @@ def atomic_path(path: str):
 
 
 def remove_temporaries(paths=None) -> None:
-    """Remove temporaries still being written (all of them by default)."""
+    """Remove temporaries still being written (all of them by default): files, and folders
+    such as a generation's ``seq_XXXXXX.partial``."""
+    import shutil
     for tmp in list(ACTIVE_TEMPORARIES if paths is None else paths):
         ACTIVE_TEMPORARIES.discard(tmp)
-        if os.path.exists(tmp):
+        if os.path.isdir(tmp):
+            shutil.rmtree(tmp, ignore_errors=True)
+        elif os.path.exists(tmp):
             os.remove(tmp)
