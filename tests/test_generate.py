@@ -150,6 +150,40 @@ def test_dataset_reads_images_and_person_crops_with_workers(sm, tiny):
         sm.SynDataset(tiny, crop="face")
 
 
+def test_shuffled_default_loader_batches_first_and_last_frames(sm, tiny, tmp_path):
+    """Every pass by default, shuffled, with workers: a first frame (no backward flow) and a
+    last frame (no forward flow) batch together (it raised KeyError: 'flow_bwd'); the missing
+    side reads as zero flow with flag NO_TARGET, the present side as written."""
+    import torch
+    from synmitsuba.annotate.flow import NO_TARGET
+    ds = sm.SynDataset(tiny)
+    assert {"rgb", "depth", "flow_fwd", "flow_bwd", "flow_fwd_flag", "flow_bwd_flag", "body_part"} <= set(ds.modalities)
+    seen = 0
+    for batch in torch.utils.data.DataLoader(ds, batch_size=4, shuffle=True, num_workers=2):
+        for k, stem in enumerate(batch["stem"]):
+            meta = sm.read_sample(stem).meta["flow_frames"]
+            for side in ("fwd", "bwd"):
+                flag = batch[f"flow_{side}_flag"][k]
+                if side in meta:
+                    assert torch.equal(flag, torch.from_numpy(sm.read_sample(stem).passes[f"flow_{side}_flag"].astype(np.int64)))
+                else:
+                    assert (flag == NO_TARGET).all() and not batch[f"flow_{side}"][k].any()
+                    seen += 1
+    assert seen >= 4  # both sides were missing somewhere
+
+
+def test_empty_or_missing_folders_are_errors_not_empty_datasets(sm, tmp_path):
+    """A dataset folder with no complete sample (a failed run) used to give a length-0 dataset
+    and a bare StopIteration later; the loader and the exports now say what is wrong."""
+    (tmp_path / "empty" / "seq_000000.partial").mkdir(parents=True)
+    for make in (lambda p: sm.SynDataset(p), lambda p: sm.export_coco(p, str(tmp_path / "c.json")),
+                 lambda p: sm.export_humandata(p, str(tmp_path / "h.npz"))):
+        with pytest.raises(ConfigError, match="no complete samples here"):
+            make(tmp_path / "empty")
+        with pytest.raises(ConfigError, match="no such folder"):
+            make(tmp_path / "missing")
+
+
 def test_stats_count_what_the_manifest_lists(tiny):
     run = subprocess.run([sys.executable, "-m", "synmitsuba", "stats", str(tiny)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr

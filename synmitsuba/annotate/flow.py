@@ -22,6 +22,7 @@ from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.scene import Scene
 
 SEEN, HIDDEN, OUTSIDE, BACKGROUND = 0, 1, 2, 3
+NO_TARGET = 4  # a loader's fill for a side with no frame to flow to (a sequence's first or last frame)
 
 
 @dataclass

@@ -74,7 +74,7 @@ def _stop_children() -> None:
     if children:  # their queues' named semaphores: unlinked now, as a normal exit would (else the tracker warns)
         from multiprocessing import util
         try:
-            util._run_finalizers(0)
+            util._run_finalizers(0)  # type: ignore[attr-defined]  # what multiprocessing runs at exit
         except Exception:  # noqa: BLE001 - best effort on the way out
             pass
 

@@ -14,7 +14,9 @@ last).
   ``body_rotations_cam``, ``body_root_cam``, ``mask`` (size, size) of the subject, the crop's
   ``K`` (the camera's, shifted and scaled), ``center``, ``scale``.
 Items are dicts of tensors (plus ``stem``) that the default collate batches, with
-``num_workers > 0`` too.
+``num_workers > 0`` and ``shuffle`` too: every item holds the same keys. A flow side a sample
+lacks (a sequence's first or last frame) reads as zero flow with flag 4 (``NO_TARGET``). A
+missing folder, or one with no complete sample, is an error.
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ import json
 import numpy as np
 
 from synmitsuba.errors import ConfigError
-from synmitsuba.io.listing import list_samples
+from synmitsuba.io.listing import dataset_samples
 from synmitsuba.io.exr import read_sample
 
 CROPS = (None, "person")
@@ -39,7 +41,7 @@ class _Base:
                  max_subjects: int | None = None):
         if crop not in CROPS:
             raise ConfigError("crop", crop, "use None (whole images) or 'person' (one crop per subject)")
-        self.stems = list_samples(root)
+        self.stems = dataset_samples(root, "root")
         self.modalities, self.crop, self.size = modalities, crop, int(size)
         self.index: list[tuple[str, int | None]] = []  # (stem, subject row) per item
         counts = []
@@ -51,6 +53,7 @@ class _Base:
                 self.index += [(stem, k) for k, r in enumerate(subjects) if r["valid"] and r["bbox_keypoints"]]
         if crop is None:
             self.index = [(stem, None) for stem in self.stems]
+            self.modalities = modalities or _default_modalities(self.stems[0])
         self.max_subjects = max_subjects if max_subjects is not None else max(counts, default=0)
 
     def __len__(self) -> int:
@@ -64,10 +67,10 @@ class _Base:
     def _image(self, s, stem) -> dict:
         torch = _torch()
         item = {}
-        for name in self.modalities or tuple(s.passes):
-            if name not in s.passes:
+        for name in self.modalities:
+            arr = s.passes[name] if name in s.passes else _missing(name, s)
+            if arr is None:
                 raise ConfigError("modalities", name, f"this sample has no such pass; it has {', '.join(s.passes)}")
-            arr = s.passes[name]
             arr = arr.astype(np.int64) if arr.dtype == np.uint8 else arr
             t = torch.from_numpy(np.ascontiguousarray(arr))
             item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
@@ -92,6 +95,34 @@ class _Base:
                 "body_root_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["root_translation"], np.float32)),
                 "K": torch.from_numpy(A @ s.camera.K), "center": torch.tensor(rec["center"]),
                 "scale": torch.tensor(rec["scale"]), "instance": rec["instance"], "stem": stem}
+
+
+FLOW_PASSES = ("flow_fwd", "flow_fwd_flag", "flow_bwd", "flow_bwd_flag")
+
+
+def _default_modalities(stem: str) -> tuple:
+    """Every pass of the dataset's first sample, and all four flow passes when it has any: a
+    sequence's first and last frames lack one side, and every item must hold the same keys for
+    the default collate."""
+    import OpenEXR
+    from synmitsuba.sample import PASSES
+    with OpenEXR.File(f"{stem}.exr", header_only=True) as f:
+        channels = {c.name for c in f.header()["channels"]}
+    names = [n for n, spec in PASSES.items() if all(c in channels for c in spec.channels)]
+    if any(n in FLOW_PASSES for n in names):
+        names += [n for n in FLOW_PASSES if n not in names]
+    return tuple(names)
+
+
+def _missing(name: str, s) -> np.ndarray | None:
+    """The fill of a flow side the sample lacks: zero flow, flag ``NO_TARGET``; None otherwise."""
+    from synmitsuba.annotate.flow import NO_TARGET
+    H, W = s.camera.height, s.camera.width
+    if name in ("flow_fwd", "flow_bwd"):
+        return np.zeros((H, W, 2), np.float32)
+    if name in ("flow_fwd_flag", "flow_bwd_flag"):
+        return np.full((H, W), NO_TARGET, np.uint8)
+    return None
 
 
 def _warp(img: np.ndarray, A: np.ndarray, size: int) -> np.ndarray:

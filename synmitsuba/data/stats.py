@@ -10,8 +10,7 @@ import os
 
 import numpy as np
 
-from synmitsuba.errors import ConfigError
-from synmitsuba.io.listing import list_samples
+from synmitsuba.io.listing import dataset_samples
 
 VISIBILITY_NAMES = ("outside", "visible", "self_occluded", "occluded_by_subject", "occluded_by_object")
 
@@ -27,9 +26,7 @@ def _scenes(root: str) -> list[dict]:
 
 def dataset_stats(root: str) -> dict:
     """Counts and value lists of a dataset folder (see the module docstring)."""
-    stems = list_samples(root)
-    if not stems:
-        raise ConfigError("dataset", root, "no complete samples here; give a folder `synmitsuba generate` wrote")
+    stems = dataset_samples(root)
     scenes = _scenes(root)
     vis_frac, dist, pitch, frames = [], [], [], set()
     vis_classes: collections.Counter = collections.Counter()

@@ -20,7 +20,7 @@ import os
 import numpy as np
 
 from synmitsuba.body.anny_model import KEYPOINTS
-from synmitsuba.io.listing import list_samples
+from synmitsuba.io.listing import dataset_samples
 from synmitsuba.io.exr import read_sample
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.files import atomic_path
@@ -75,7 +75,7 @@ def export_coco(dataset_dir: str, out_json: str, keypoint_coords: str = "continu
     base = os.path.dirname(os.path.abspath(out_json))
     images: list[dict] = []
     anns: list[dict] = []
-    for image_id, stem in enumerate(list_samples(dataset_dir), 1):
+    for image_id, stem in enumerate(dataset_samples(dataset_dir, "dataset_dir"), 1):
         sample = read_sample(stem)
         images.append({"id": image_id, "file_name": os.path.relpath(f"{stem}.png", base),
                        "width": sample.camera.width, "height": sample.camera.height})
@@ -133,7 +133,7 @@ def export_humandata(dataset_dir: str, out_npz: str) -> dict:
 
     def add(key, value):
         cols.setdefault(key, []).append(value)
-    for stem in list_samples(dataset_dir):
+    for stem in dataset_samples(dataset_dir, "dataset_dir"):
         sample = read_sample(stem)
         cam = sample.camera
         for rec in sample.subjects:
