@@ -281,3 +281,24 @@ def test_ctrl_c_stops_every_worker_and_keeps_only_complete_sequences(tmp_path):
         if (out / "manifest.jsonl").exists() else set()
     seqs = {d.name for d in out.iterdir() if d.name.startswith("seq_")}
     assert seqs <= listed, seqs - listed
+
+
+def test_loader_image_formats_and_visibility_codes_follow_one_table(sm, tiny):
+    """sRGB uint8 and ImageNet-normalised images come from the same linear render (to_srgb8,
+    computed apart here); COCO visibility flags in the loader equal the COCO export's."""
+    import torch
+    from synmitsuba.io.preview import to_srgb8
+    lin = sm.SynDataset(tiny, crop="person", size=48)
+    s8 = sm.SynDataset(tiny, crop="person", size=48, image="srgb8", visibility="coco")
+    nrm = sm.SynDataset(tiny, crop="person", size=48, image="normalized", mean=(0.5, 0.5, 0.5), std=(0.25, 0.25, 0.25))
+    a, b, c = lin[0], s8[0], nrm[0]
+    assert b["image"].dtype == torch.uint8 and lin[0]["image"].dtype == torch.float32
+    expect = to_srgb8(a["image"].numpy().transpose(1, 2, 0)).transpose(2, 0, 1)
+    assert np.array_equal(b["image"].numpy(), expect)
+    assert np.allclose(c["image"].numpy(), (expect / 255.0 - 0.5) / 0.25, atol=1e-6)
+    classes, flags = a["keypoints2d"][:, 2].numpy().astype(int), b["keypoints2d"][:, 2].numpy().astype(int)
+    assert np.array_equal(flags, np.where(classes == 0, 0, np.where(classes == 1, 2, 1)))  # COCO: 2 visible, 1 occluded
+    whole = sm.SynDataset(tiny, modalities=["rgb"], image="srgb8", visibility="coco")[0]
+    assert whole["rgb"].dtype == torch.uint8 and set(np.unique(whole["keypoints2d"][..., 2].numpy())) <= {0, 1, 2}
+    with pytest.raises(ConfigError, match="image = 'jpeg'"):
+        sm.SynDataset(tiny, image="jpeg")

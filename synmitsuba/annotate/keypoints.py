@@ -17,6 +17,14 @@ from synmitsuba.engine.raycast import cast
 from synmitsuba.scene.camera import Camera
 
 VISIBILITY = {0: "outside", 1: "visible", 2: "self_occluded", 3: "occluded_by_subject", 4: "occluded_by_object"}
+# The one mapping of these classes onto COCO's flags (2 visible, 1 in the image but occluded, 0
+# not labelled): the COCO export, HumanData and SynDataset(visibility="coco") all read it.
+COCO_FLAGS = np.array([0, 2, 1, 1, 1], np.uint8)
+
+
+def coco_flags(classes) -> np.ndarray:
+    """COCO keypoint flags of ``VISIBILITY`` classes."""
+    return COCO_FLAGS[np.asarray(classes, np.int64)]
 
 
 def _sphere(n: int) -> np.ndarray:

@@ -8,6 +8,10 @@ last).
   says which rows are real), ``keypoints2d`` (S, 23, 3: x, y, visibility class),
   ``keypoints3d_cam`` (S, 23, 3), ``body_rotations_cam`` (S, J, 3), ``body_root_cam`` (S, 3),
   ``instances`` (S,).
+- ``image``: ``float`` (linear, HDR, as rendered), ``srgb8`` (uint8) or ``normalized`` (sRGB
+  in [0, 1], minus ``mean``, over ``std``: ImageNet's by default) for ``rgb`` and crops;
+  ``visibility``: the keypoints' third column as our ``classes`` (annotate.keypoints.VISIBILITY)
+  or as ``coco`` flags (2 visible, 1 occluded, 0 outside: the COCO export's table).
 - ``crop="person"``: one item per valid subject and sample, the top-down HMR crop: ``image``
   (3, size, size) cut around the keypoint box (centre, side = 200 * scale) and resized,
   ``keypoints2d`` (23, 3) in crop pixels with visibility, ``keypoints3d_cam``,
@@ -29,6 +33,9 @@ from synmitsuba.io.listing import dataset_samples
 from synmitsuba.io.exr import read_sample
 
 CROPS = (None, "person")
+IMAGE_FORMATS = ("float", "srgb8", "normalized")
+VISIBILITY_CODES = ("classes", "coco")
+IMAGENET_MEAN, IMAGENET_STD = (0.485, 0.456, 0.406), (0.229, 0.224, 0.225)
 
 
 def _torch():
@@ -38,9 +45,16 @@ def _torch():
 
 class _Base:
     def __init__(self, root: str, modalities=None, crop: str | None = None, size: int = 224,
-                 max_subjects: int | None = None):
+                 max_subjects: int | None = None, image: str = "float", mean=IMAGENET_MEAN, std=IMAGENET_STD,
+                 visibility: str = "classes"):
         if crop not in CROPS:
             raise ConfigError("crop", crop, "use None (whole images) or 'person' (one crop per subject)")
+        if image not in IMAGE_FORMATS:
+            raise ConfigError("image", image, f"use one of {', '.join(IMAGE_FORMATS)}")
+        if visibility not in VISIBILITY_CODES:
+            raise ConfigError("visibility", visibility, f"use one of {', '.join(VISIBILITY_CODES)}")
+        self.image, self.visibility = image, visibility
+        self.mean, self.std = np.asarray(mean, np.float32), np.asarray(std, np.float32)
         self.stems = dataset_samples(root, "root")
         self.modalities, self.crop, self.size = modalities, crop, int(size)
         self.index: list[tuple[str, int | None]] = []  # (stem, subject row) per item
@@ -72,9 +86,10 @@ class _Base:
             if arr is None:
                 raise ConfigError("modalities", name, f"this sample has no such pass; it has {', '.join(s.passes)}")
             arr = arr.astype(np.int64) if arr.dtype == np.uint8 else arr
+            arr = self._format(arr) if name == "rgb" else arr
             t = torch.from_numpy(np.ascontiguousarray(arr))
             item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
-        item.update(_subjects(s.subjects, self.max_subjects))
+        item.update(_subjects(s.subjects, self.max_subjects, self.visibility))
         item.update(K=torch.from_numpy(s.camera.K), R=torch.from_numpy(s.camera.R), t=torch.from_numpy(s.camera.t),
                     stem=stem)
         return item
@@ -87,14 +102,23 @@ class _Base:
         A = np.array([[f, 0, -f * x0], [0, f, -f * y0], [0, 0, 1.0]])  # image pixels -> crop pixels
         image = _warp(s.rgb, A, self.size)
         mask = _warp((s.instance == rec["instance"]).astype(np.float32)[..., None], A, self.size)[..., 0] > 0.5
-        kp = np.concatenate([rec["keypoints2d"] * f - [f * x0, f * y0], rec["visibility"][:, None]], 1)
-        return {"image": torch.from_numpy(np.ascontiguousarray(image.transpose(2, 0, 1), np.float32)),
+        kp = np.concatenate([rec["keypoints2d"] * f - [f * x0, f * y0], _codes(rec["visibility"], self.visibility)[:, None]], 1)
+        return {"image": torch.from_numpy(np.ascontiguousarray(self._format(image.astype(np.float32)).transpose(2, 0, 1))),
                 "mask": torch.from_numpy(mask), "keypoints2d": torch.from_numpy(kp.astype(np.float32)),
                 "keypoints3d_cam": torch.from_numpy(rec["keypoints3d_cam"].astype(np.float32)),
                 "body_rotations_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["rotations"], np.float32)),
                 "body_root_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["root_translation"], np.float32)),
                 "K": torch.from_numpy(A @ s.camera.K), "center": torch.tensor(rec["center"]),
                 "scale": torch.tensor(rec["scale"]), "instance": rec["instance"], "stem": stem}
+
+    def _format(self, rgb: np.ndarray) -> np.ndarray:
+        """The image (H, W, 3 linear RGB) as asked: ``float`` linear (HDR, as rendered),
+        ``srgb8`` uint8 sRGB, ``normalized`` sRGB in [0, 1] minus ``mean``, over ``std``."""
+        if self.image == "float":
+            return rgb
+        from synmitsuba.io.preview import to_srgb8
+        srgb = to_srgb8(rgb)
+        return srgb if self.image == "srgb8" else ((srgb.astype(np.float32) / 255.0 - self.mean) / self.std).astype(np.float32)
 
 
 FLOW_PASSES = ("flow_fwd", "flow_fwd_flag", "flow_bwd", "flow_bwd_flag")
@@ -136,7 +160,12 @@ def _warp(img: np.ndarray, A: np.ndarray, size: int) -> np.ndarray:
     return np.stack([map_coordinates(img[..., c], coords, order=1, cval=0.0) for c in range(img.shape[2])], -1)
 
 
-def _subjects(records: list, n: int) -> dict:
+def _codes(classes: np.ndarray, visibility: str) -> np.ndarray:
+    from synmitsuba.annotate.keypoints import coco_flags
+    return np.asarray(classes) if visibility == "classes" else coco_flags(classes)
+
+
+def _subjects(records: list, n: int, visibility: str = "classes") -> dict:
     torch = _torch()
     J = len(records[0]["body_params_cam"]["rotations"]) if records else 0
     kp2 = np.zeros((n, 23, 3), np.float32)
@@ -145,7 +174,7 @@ def _subjects(records: list, n: int) -> dict:
     root = np.zeros((n, 3), np.float32)
     inst, valid = np.zeros(n, np.int64), np.zeros(n, bool)
     for k, r in enumerate(records[:n]):
-        kp2[k] = np.concatenate([r["keypoints2d"], r["visibility"][:, None]], 1)
+        kp2[k] = np.concatenate([r["keypoints2d"], _codes(r["visibility"], visibility)[:, None]], 1)
         kp3[k], rot[k] = r["keypoints3d_cam"], r["body_params_cam"]["rotations"]
         root[k], inst[k], valid[k] = r["body_params_cam"]["root_translation"], r["instance"], r["valid"]
     if not n:

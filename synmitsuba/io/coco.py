@@ -20,6 +20,7 @@ import os
 import numpy as np
 
 from synmitsuba.body.anny_model import KEYPOINTS
+from synmitsuba.annotate.keypoints import coco_flags
 from synmitsuba.io.listing import dataset_samples
 from synmitsuba.io.exr import read_sample
 from synmitsuba.errors import ConfigError
@@ -47,10 +48,15 @@ KEYPOINT_COORDS = {"continuous": 0.0, "pixel_index": -0.5}  # added to keypoint 
 
 def _keypoints(rec: dict, first: int, count: int, shift: float = 0.0) -> list:
     out = []
-    for (x, y), v in zip(np.asarray(rec["keypoints2d"])[first:first + count], rec["visibility"][first:first + count]):
-        flag = 0 if v == 0 else (2 if v == 1 else 1)
-        out += [float(x) + shift, float(y) + shift, flag] if flag else [0.0, 0.0, 0]
+    flags = coco_flags(rec["visibility"][first:first + count])
+    for (x, y), flag in zip(np.asarray(rec["keypoints2d"])[first:first + count], flags):
+        out += [float(x) + shift, float(y) + shift, int(flag)] if flag else [0.0, 0.0, 0]
     return out
+
+
+def _xywh(box: list | None) -> list | None:
+    """A ``[x_min, y_min, x_max, y_max]`` box as COCO writes boxes, ``[x, y, w, h]``."""
+    return None if box is None else [box[0], box[1], box[2] - box[0], box[3] - box[1]]
 
 
 def _annotation(rec: dict, sample, image_id: int, ann_id: int, shift: float) -> dict | None:
@@ -60,9 +66,9 @@ def _annotation(rec: dict, sample, image_id: int, ann_id: int, shift: float) -> 
     box = rec["bbox_visible"]
     kps = _keypoints(rec, 0, 17, shift)
     return {"id": ann_id, "image_id": image_id, "category_id": 1, "iscrowd": 0, "segmentation": rle(visible),
-            "area": float(visible.sum()), "bbox": [box[0], box[1], box[2] - box[0], box[3] - box[1]],
+            "area": float(visible.sum()), "bbox": _xywh(box),
             "keypoints": kps, "num_keypoints": int(sum(1 for v in kps[2::3] if v > 0)),
-            "foot_kpts": _keypoints(rec, 17, 6, shift), "bbox_amodal": rec["bbox_amodal"], "instance": rec["instance"],
+            "foot_kpts": _keypoints(rec, 17, 6, shift), "bbox_amodal": _xywh(rec["bbox_amodal"]), "instance": rec["instance"],
             "visible_fraction": rec["visible_fraction"]}
 
 
