@@ -5,7 +5,8 @@ PYTHON ?= python3
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.synmitsuba-installed
-export ANNY_CACHE_DIR ?= $(CURDIR)/.cache/anny
+# anny's processed model (790 MB) stays in the user's cache (~/.cache/anny, or $ANNY_CACHE_DIR),
+# shared by every checkout; the small kernel caches stay per checkout.
 export WARP_CACHE_PATH ?= $(CURDIR)/.cache/warp
 export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
 

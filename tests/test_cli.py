@@ -215,3 +215,10 @@ def test_ctrl_c_is_one_line_and_leaves_nothing_half_written(delay, tmp_path):
     assert not any(".tmp-" in n for n in names)
     stems = {n.rsplit(".", 1)[0] for n in names}
     assert all((out / f"{s}.exr").exists() for s in stems if (out / f"{s}.json").exists())
+
+
+def test_stats_to_an_unwritable_place_is_one_line(tiny, capsys):
+    """It ended in a FileNotFoundError traceback after computing everything."""
+    assert main(["stats", str(tiny), "--out", "/proc/x.png"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("synmitsuba stats: error: --out = "), err

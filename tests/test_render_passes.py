@@ -72,6 +72,7 @@ def test_sphere_normals_match_analytic(sm):
     angle = np.degrees(np.arccos(np.clip((n * n_true).sum(1), -1, 1)))
     assert angle.max() < 0.5
     assert (n[:, 2] < 0).all()  # camera-facing normals point against the optical axis (OpenCV z forward)
+    assert ((n * (d[inside] @ cam.R.T)).sum(1) <= 1e-6).all()  # what FORMAT.md promises in general: n . d <= 0
 
 
 def test_instance_and_layer_ids_are_exact_integers(sm):

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import sys
 
 from synmitsuba.cli.args import natural_int, positive_int
 from synmitsuba.generate.executors import EXECUTORS
@@ -16,6 +17,9 @@ def run(args) -> int:
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
     cfg = load_generate_config(args.config, overrides)  # every key checked before any work
+    if not args.quiet:  # the bar sits at 0 % for a minute or two at first: say why
+        print(f"{cfg.sequences} sequence(s) on {args.workers} worker(s), {args.executor}: each worker's first sequence "
+              "builds its subjects and compiles the render kernels, so it takes longest", file=sys.stderr)
     summary = generate(cfg, args.out, workers=args.workers, executor=args.executor, ray_address=args.ray_address,
                        max_failures=args.max_failures, progress=not args.quiet,
                        allow_config_change=args.allow_config_change)

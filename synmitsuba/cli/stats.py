@@ -6,10 +6,11 @@ import os
 
 
 def run(args) -> int:
+    from synmitsuba.cli.args import output_file
     from synmitsuba.data.stats import dataset_stats, stats_figure, summarise
     from synmitsuba.io.files import atomic_path
+    png = output_file(args.out) if args.out else os.path.join(args.dataset, "stats.png")  # checked before the work
     stats = dataset_stats(args.dataset)
-    png = args.out or os.path.join(args.dataset, "stats.png")
     print(stats_figure(stats, png))
     path = os.path.splitext(png)[0] + ".json"
     with atomic_path(path) as tmp, open(tmp, "w") as fh:
