@@ -3,6 +3,8 @@ visibility) and boxes, depth, normals, instance ids, layer ids, each subject's a
 over its visible pixels, and the optical flow (colour wheel)."""
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from synmitsuba.io.preview import contact_sheet, to_srgb8
@@ -25,14 +27,28 @@ def _ids_to_colours(ids: np.ndarray) -> np.ndarray:
 
 
 def _depth(sample: Sample) -> np.ndarray:
+    """Depth by inverse depth (near bright): a ground running to the horizon would otherwise take
+    the whole scale and leave the people one colour with the ground under them."""
     d = sample.depth
     m = d > 0
     out = np.zeros(d.shape + (3,), np.uint8)
     if m.any():
         lo, hi = np.percentile(d[m], [1, 99])
-        v = 1 - np.clip((d - lo) / max(hi - lo, 1e-6), 0, 1)
+        inv = 1.0 / np.maximum(d, 1e-6)
+        v = np.clip((inv - 1.0 / hi) / max(1.0 / lo - 1.0 / hi, 1e-9), 0, 1)
         out[m] = (np.stack([v, v ** 0.5, 1 - v], -1)[m] * 255).astype(np.uint8)
     return out
+
+
+def caption(tile: np.ndarray, text: str) -> np.ndarray:
+    """``tile`` with ``text`` in its top-left corner, white on a dark band."""
+    from PIL import Image, ImageDraw
+    img = Image.fromarray(np.ascontiguousarray(tile))
+    d = ImageDraw.Draw(img)
+    x0, y0, x1, y1 = d.textbbox((2, 1), text)
+    d.rectangle([0, 0, x1 + 2, y1 + 1], fill=(0, 0, 0))
+    d.text((2, 1), text, fill=(255, 255, 255))
+    return np.asarray(img)
 
 
 def _annotated_rgb(sample: Sample):
@@ -77,19 +93,20 @@ def flow_colours(flow: np.ndarray, scale: float | None = None) -> np.ndarray:
 
 def sample_panel(sample: Sample, columns: int = 3) -> np.ndarray:
     """(H', W', 3) uint8 panel of the sample's labels."""
-    tiles = [_annotated_rgb(sample), _depth(sample)]
+    tiles = [caption(_annotated_rgb(sample), "rgb, keypoints, boxes"), caption(_depth(sample), "depth (near bright)")]
     if "normal" in sample.passes:
         n = sample.normal
-        tiles.append((np.where(sample.mask[..., None], (n * [1, -1, -1] + 1) / 2, 0) * 255).astype(np.uint8))
-    tiles.append(_ids_to_colours(sample.instance))
-    tiles.append(_ids_to_colours(sample.layer.astype(np.int64) * 7919))
+        tiles.append(caption((np.where(sample.mask[..., None], (n * [1, -1, -1] + 1) / 2, 0) * 255).astype(np.uint8),
+                             "normal"))
+    tiles.append(caption(_ids_to_colours(sample.instance), "instance"))
+    tiles.append(caption(_ids_to_colours(sample.layer.astype(np.int64) * 7919), "layer"))
     if sample.subjects:
-        tiles.append(_amodal(sample))
+        tiles.append(caption(_amodal(sample), "amodal (hidden dim)"))
     if "body_part" in sample.passes:
-        tiles.append(_ids_to_colours(sample.body_part.astype(np.int64) * 7919))
+        tiles.append(caption(_ids_to_colours(sample.body_part.astype(np.int64) * 7919), "body part"))
     for name in ("flow_fwd", "flow_bwd"):
         if name in sample.passes:
-            tiles.append(flow_colours(sample.passes[name]))
+            tiles.append(caption(flow_colours(sample.passes[name]), name.replace("_", " ")))
             break
     return contact_sheet(tiles, columns)
 
@@ -102,6 +119,8 @@ def dataset_sheet(stems: list, count: int = 6) -> np.ndarray:
     tiles = []
     for stem in picks:
         s = read_sample(stem)
-        tiles += [_annotated_rgb(s), _depth(s), _ids_to_colours(s.instance),
-                  _ids_to_colours(s.layer.astype(np.int64) * 7919)]
+        name = os.path.join(os.path.basename(os.path.dirname(stem)), os.path.basename(stem))
+        tiles += [caption(_annotated_rgb(s), name), caption(_depth(s), "depth (near bright)"),
+                  caption(_ids_to_colours(s.instance), "instance"),
+                  caption(_ids_to_colours(s.layer.astype(np.int64) * 7919), "layer")]
     return contact_sheet(tiles, 4)
