@@ -302,3 +302,27 @@ def test_loader_image_formats_and_visibility_codes_follow_one_table(sm, tiny):
     assert whole["rgb"].dtype == torch.uint8 and set(np.unique(whole["keypoints2d"][..., 2].numpy())) <= {0, 1, 2}
     with pytest.raises(ConfigError, match="image = 'jpeg'"):
         sm.SynDataset(tiny, image="jpeg")
+
+
+def test_loader_carries_body_model_fits_where_records_have_them(sm, tiny, tmp_path):
+    """Records with SMPL-X parameters (as fit-smplx writes them) reach crops and whole images
+    under the smplx package's names; a record without them reads as zeros, valid False."""
+    import torch
+    rng = np.random.default_rng(0)
+    stems = sorted(str(p.with_suffix("")) for p in (tiny / "seq_000000").glob("f*_cam0.json"))
+    fits = []
+    for k, stem in enumerate(stems):
+        s = sm.read_sample(stem)
+        fit = {"model": "smplx", "gender": "neutral", "betas": rng.normal(size=10), "global_orient": rng.normal(size=3),
+               "body_pose": rng.normal(size=(21, 3)), "transl": rng.normal(size=3)}
+        if k == 0:
+            s.subjects[0].add_body_models({"smplx_cam": fit, "smplx_world": fit})
+        fits.append(fit if k == 0 else None)
+        sm.write_sample(s, tmp_path / "d" / f"{k:04d}")
+    crops = sm.SynDataset(tmp_path / "d", crop="person")
+    first = crops[0]
+    assert first["smplx_valid"] and np.allclose(first["smplx_body_pose"].numpy(), fits[0]["body_pose"], atol=1e-6)
+    assert set(first) >= {"smplx_betas", "smplx_global_orient", "smplx_transl"} and not crops[1]["smplx_valid"]
+    assert not crops[1]["smplx_body_pose"].any()
+    batch = next(iter(torch.utils.data.DataLoader(sm.SynDataset(tmp_path / "d"), batch_size=2)))
+    assert batch["smplx_body_pose"].shape == (2, 1, 21, 3) and batch["smplx_valid"].tolist() == [[True], [False]]

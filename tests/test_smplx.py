@@ -173,3 +173,12 @@ def test_generation_and_fit_smplx_write_the_same_labels(models, tiny, tmp_path, 
     data = np.load(hd)
     assert data["smplx.body_pose"].shape == (2, 21, 3) and data["smplx.valid"].all() and data["smplx.fit_ok"].all()
     assert np.array_equal(data["smplx.transl"], np.array(transl))
+    import torch
+    crops = sm.SynDataset(str(tmp_path / "after"), crop="person")  # the loader carries the fits too
+    item = crops[0]
+    fit = sm.read_sample(item["stem"]).subjects[0]["smplx_cam"]
+    assert item["smplx_valid"] and item["smplx_body_pose"].shape == (21, 3) and "smpl_body_pose" not in item
+    assert np.allclose(item["smplx_body_pose"].numpy(), fit["body_pose"], atol=1e-6)
+    assert np.allclose(item["smplx_transl"].numpy(), fit["transl"], atol=1e-6)
+    batch = next(iter(torch.utils.data.DataLoader(sm.SynDataset(str(tmp_path / "after")), batch_size=2, shuffle=True)))
+    assert batch["smplx_body_pose"].shape == (2, 1, 21, 3) and batch["smplx_valid"].all()

@@ -17,6 +17,10 @@ last).
   ``keypoints2d`` (23, 3) in crop pixels with visibility, ``keypoints3d_cam``,
   ``body_rotations_cam``, ``body_root_cam``, ``mask`` (size, size) of the subject, the crop's
   ``K`` (the camera's, shifted and scaled), ``center``, ``scale``.
+- After ``synmitsuba fit-smplx`` (or a generation with ``smplx.enabled``), items also hold each
+  fitted model's camera-frame parameters in the smplx package's names, ``smplx_betas``,
+  ``smplx_global_orient``, ``smplx_body_pose``, ``smplx_transl``, hands, jaw, eyes,
+  ``smplx_expression`` (and ``smpl_*``), with ``smplx_valid`` (per subject for whole images).
 Items are dicts of tensors (plus ``stem``) that the default collate batches, with
 ``num_workers > 0`` and ``shuffle`` too: every item holds the same keys. A flow side a sample
 lacks (a sequence's first or last frame) reads as zero flow with flag 4 (``NO_TARGET``). A
@@ -58,11 +62,17 @@ class _Base:
         self.stems = dataset_samples(root, "root")
         self.modalities, self.crop, self.size = modalities, crop, int(size)
         self.index: list[tuple[str, int | None]] = []  # (stem, subject row) per item
+        self.body_models: dict[str, dict] = {}  # kind -> {parameter: zeros of its shape}
         counts = []
         for stem in self.stems:
             with open(f"{stem}.json") as fh:
                 subjects = json.load(fh).get("subjects", [])
             counts.append(len(subjects))
+            for r in subjects:  # body-model fits anywhere in the dataset: every item carries their keys
+                for kind in BODY_MODELS:
+                    if f"{kind}_cam" in r and kind not in self.body_models:
+                        self.body_models[kind] = {k: np.zeros_like(np.asarray(v, np.float32))
+                                                  for k, v in r[f"{kind}_cam"].items() if k in BODY_MODEL_KEYS}
             if crop == "person":
                 self.index += [(stem, k) for k, r in enumerate(subjects) if r["valid"] and r["bbox_keypoints"]]
         if crop is None:
@@ -90,6 +100,12 @@ class _Base:
             t = torch.from_numpy(np.ascontiguousarray(arr))
             item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
         item.update(_subjects(s.subjects, self.max_subjects, self.visibility))
+        for kind, blank in self.body_models.items():
+            rows = [_body_model(r, kind, blank) for r in s.subjects[:self.max_subjects]]
+            rows += [(blank, False)] * (self.max_subjects - len(rows))
+            item[f"{kind}_valid"] = torch.tensor([ok for _, ok in rows])
+            for key in blank:
+                item[f"{kind}_{key}"] = torch.from_numpy(np.stack([p[key] for p, _ in rows]).astype(np.float32))
         item.update(K=torch.from_numpy(s.camera.K), R=torch.from_numpy(s.camera.R), t=torch.from_numpy(s.camera.t),
                     stem=stem)
         return item
@@ -109,7 +125,19 @@ class _Base:
                 "body_rotations_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["rotations"], np.float32)),
                 "body_root_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["root_translation"], np.float32)),
                 "K": torch.from_numpy(A @ s.camera.K), "center": torch.tensor(rec["center"]),
-                "scale": torch.tensor(rec["scale"]), "instance": rec["instance"], "stem": stem}
+                "scale": torch.tensor(rec["scale"]), "instance": rec["instance"], "stem": stem,
+                **self._fits(rec)}
+
+    def _fits(self, rec) -> dict:
+        """``<kind>_<parameter>`` (camera frame) of each body model fitted in the dataset, and
+        ``<kind>_valid`` (False: zeros, this subject has no fit for this frame)."""
+        torch = _torch()
+        out = {}
+        for kind, blank in self.body_models.items():
+            params, ok = _body_model(rec, kind, blank)
+            out[f"{kind}_valid"] = torch.tensor(ok)
+            out.update({f"{kind}_{k}": torch.from_numpy(np.asarray(params[k], np.float32)) for k in blank})
+        return out
 
     def _format(self, rgb: np.ndarray) -> np.ndarray:
         """The image (H, W, 3 linear RGB) as asked: ``float`` linear (HDR, as rendered),
@@ -122,6 +150,17 @@ class _Base:
 
 
 FLOW_PASSES = ("flow_fwd", "flow_fwd_flag", "flow_bwd", "flow_bwd_flag")
+BODY_MODELS = ("smplx", "smpl")
+BODY_MODEL_KEYS = ("betas", "global_orient", "body_pose", "transl", "jaw_pose", "leye_pose", "reye_pose",
+                   "left_hand_pose", "right_hand_pose", "expression")
+
+
+def _body_model(rec, kind: str, blank: dict) -> tuple[dict, bool]:
+    """A record's ``<kind>_cam`` parameters (the smplx package's names) and whether it has them."""
+    params = rec.get(f"{kind}_cam") if hasattr(rec, "get") else None
+    if not params:
+        return blank, False
+    return {k: np.asarray(params[k], np.float32) for k in blank}, True
 
 
 def _default_modalities(stem: str) -> tuple:
