@@ -326,3 +326,28 @@ def test_loader_carries_body_model_fits_where_records_have_them(sm, tiny, tmp_pa
     assert not crops[1]["smplx_body_pose"].any()
     batch = next(iter(torch.utils.data.DataLoader(sm.SynDataset(tmp_path / "d"), batch_size=2)))
     assert batch["smplx_body_pose"].shape == (2, 1, 21, 3) and batch["smplx_valid"].tolist() == [[True], [False]]
+
+
+def test_loader_keypoint_conventions(sm, tiny):
+    """OpenPose-25, COCO-17 and COCO-WholeBody layouts from our 23 points: the neck is the
+    shoulders' midpoint (occluded when either shoulder is), WholeBody keeps our 23 first and
+    masks face and hands."""
+    ours = sm.SynDataset(tiny, crop="person", size=64)[0]
+    op = sm.SynDataset(tiny, crop="person", size=64, keypoints="openpose25")[0]
+    wb = sm.SynDataset(tiny, crop="person", size=64, keypoints="coco_wholebody")[0]
+    c17 = sm.SynDataset(tiny, crop="person", size=64, keypoints="coco17")[0]
+    k, o = ours["keypoints2d"].numpy(), op["keypoints2d"].numpy()
+    assert o.shape == (25, 3) and op["keypoints_mask"].tolist() == [1] * 25
+    assert np.allclose(o[1, :2], (k[5, :2] + k[6, :2]) / 2, atol=1e-5)       # neck
+    assert np.allclose(o[8, :2], (k[11, :2] + k[12, :2]) / 2, atol=1e-5)     # mid hip
+    assert np.allclose(o[[2, 5, 19, 24], :2], k[[6, 5, 17, 22], :2])        # R/L shoulder, L big toe, R heel
+    expect = k[5, 2] if k[5, 2] == k[6, 2] else (0 if 0 in (k[5, 2], k[6, 2]) else max(k[5, 2], k[6, 2]))
+    assert o[1, 2] == expect
+    assert np.allclose(op["keypoints3d_cam"].numpy()[1], (ours["keypoints3d_cam"].numpy()[5] + ours["keypoints3d_cam"].numpy()[6]) / 2, atol=1e-6)
+    assert wb["keypoints2d"].shape == (133, 3) and int(wb["keypoints_mask"].sum()) == 23
+    assert np.array_equal(wb["keypoints2d"].numpy()[:23], k) and not wb["keypoints2d"].numpy()[23:].any()
+    assert np.array_equal(c17["keypoints2d"].numpy(), k[:17])
+    whole = sm.SynDataset(tiny, modalities=["depth"], keypoints="openpose25")[0]
+    assert whole["keypoints2d"].shape[1:] == (25, 3)
+    with pytest.raises(ConfigError, match="keypoints = 'h36m'"):
+        sm.SynDataset(tiny, keypoints="h36m")

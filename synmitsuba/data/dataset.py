@@ -17,6 +17,10 @@ last).
   ``keypoints2d`` (23, 3) in crop pixels with visibility, ``keypoints3d_cam``,
   ``body_rotations_cam``, ``body_root_cam``, ``mask`` (size, size) of the subject, the crop's
   ``K`` (the camera's, shifted and scaled), ``center``, ``scale``.
+- ``keypoints``: the layout of ``keypoints2d`` / ``keypoints3d_cam``: ``ours`` (23), ``coco17``,
+  ``coco_wholebody`` (133; face and hands masked out), ``openpose25`` (neck and mid-hip the
+  means of shoulders and hips); ``keypoints_mask`` says which points are labelled
+  (``annotate.conventions``).
 - After ``synmitsuba fit-smplx`` (or a generation with ``smplx.enabled``), items also hold each
   fitted model's camera-frame parameters in the smplx package's names, ``smplx_betas``,
   ``smplx_global_orient``, ``smplx_body_pose``, ``smplx_transl``, hands, jaw, eyes,
@@ -50,14 +54,17 @@ def _torch():
 class _Base:
     def __init__(self, root: str, modalities=None, crop: str | None = None, size: int = 224,
                  max_subjects: int | None = None, image: str = "float", mean=IMAGENET_MEAN, std=IMAGENET_STD,
-                 visibility: str = "classes"):
+                 visibility: str = "classes", keypoints: str = "ours"):
         if crop not in CROPS:
             raise ConfigError("crop", crop, "use None (whole images) or 'person' (one crop per subject)")
         if image not in IMAGE_FORMATS:
             raise ConfigError("image", image, f"use one of {', '.join(IMAGE_FORMATS)}")
         if visibility not in VISIBILITY_CODES:
             raise ConfigError("visibility", visibility, f"use one of {', '.join(VISIBILITY_CODES)}")
-        self.image, self.visibility = image, visibility
+        from synmitsuba.annotate.conventions import CONVENTIONS
+        if keypoints not in CONVENTIONS:
+            raise ConfigError("keypoints", keypoints, f"use one of {', '.join(CONVENTIONS)}")
+        self.image, self.visibility, self.keypoints = image, visibility, keypoints
         self.mean, self.std = np.asarray(mean, np.float32), np.asarray(std, np.float32)
         self.stems = dataset_samples(root, "root")
         self.modalities, self.crop, self.size = modalities, crop, int(size)
@@ -99,7 +106,7 @@ class _Base:
             arr = self._format(arr) if name == "rgb" else arr
             t = torch.from_numpy(np.ascontiguousarray(arr))
             item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
-        item.update(_subjects(s.subjects, self.max_subjects, self.visibility))
+        item.update(_subjects(s.subjects, self.max_subjects, self.visibility, self.keypoints))
         for kind, blank in self.body_models.items():
             rows = [_body_model(r, kind, blank) for r in s.subjects[:self.max_subjects]]
             rows += [(blank, False)] * (self.max_subjects - len(rows))
@@ -118,10 +125,11 @@ class _Base:
         A = np.array([[f, 0, -f * x0], [0, f, -f * y0], [0, 0, 1.0]])  # image pixels -> crop pixels
         image = _warp(s.rgb, A, self.size)
         mask = _warp((s.instance == rec["instance"]).astype(np.float32)[..., None], A, self.size)[..., 0] > 0.5
-        kp = np.concatenate([rec["keypoints2d"] * f - [f * x0, f * y0], _codes(rec["visibility"], self.visibility)[:, None]], 1)
+        kp2, kp3, vis, kmask = _keypoints(rec, self.keypoints)
+        kp = np.concatenate([(kp2 * f - [f * x0, f * y0]) * kmask[:, None], _codes(vis, self.visibility)[:, None]], 1)
         return {"image": torch.from_numpy(np.ascontiguousarray(self._format(image.astype(np.float32)).transpose(2, 0, 1))),
                 "mask": torch.from_numpy(mask), "keypoints2d": torch.from_numpy(kp.astype(np.float32)),
-                "keypoints3d_cam": torch.from_numpy(rec["keypoints3d_cam"].astype(np.float32)),
+                "keypoints3d_cam": torch.from_numpy(kp3.astype(np.float32)), "keypoints_mask": torch.from_numpy(kmask),
                 "body_rotations_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["rotations"], np.float32)),
                 "body_root_cam": torch.from_numpy(np.asarray(rec["body_params_cam"]["root_translation"], np.float32)),
                 "K": torch.from_numpy(A @ s.camera.K), "center": torch.tensor(rec["center"]),
@@ -204,21 +212,33 @@ def _codes(classes: np.ndarray, visibility: str) -> np.ndarray:
     return np.asarray(classes) if visibility == "classes" else coco_flags(classes)
 
 
-def _subjects(records: list, n: int, visibility: str = "classes") -> dict:
+def _keypoints(rec, convention: str):
+    """(2D (K, 2), 3D camera frame (K, 3), classes (K,), mask (K,)) in ``convention``."""
+    from synmitsuba.annotate.conventions import CONVENTIONS, convert_keypoints
+    both = np.concatenate([np.asarray(rec["keypoints2d"]), np.asarray(rec["keypoints3d_cam"])], 1)
+    pts, vis = convert_keypoints(both, rec["visibility"], convention)
+    return pts[:, :2], pts[:, 2:], vis, CONVENTIONS[convention].mask
+
+
+def _subjects(records: list, n: int, visibility: str = "classes", convention: str = "ours") -> dict:
+    from synmitsuba.annotate.conventions import CONVENTIONS
     torch = _torch()
     J = len(records[0]["body_params_cam"]["rotations"]) if records else 0
-    kp2 = np.zeros((n, 23, 3), np.float32)
-    kp3 = np.zeros((n, 23, 3), np.float32)
+    K = len(CONVENTIONS[convention].names)
+    kp2 = np.zeros((n, K, 3), np.float32)
+    kp3 = np.zeros((n, K, 3), np.float32)
     rot = np.zeros((n, J, 3), np.float32)
     root = np.zeros((n, 3), np.float32)
     inst, valid = np.zeros(n, np.int64), np.zeros(n, bool)
     for k, r in enumerate(records[:n]):
-        kp2[k] = np.concatenate([r["keypoints2d"], _codes(r["visibility"], visibility)[:, None]], 1)
-        kp3[k], rot[k] = r["keypoints3d_cam"], r["body_params_cam"]["rotations"]
+        p2, p3, vis, _ = _keypoints(r, convention)
+        kp2[k] = np.concatenate([p2, _codes(vis, visibility)[:, None]], 1)
+        kp3[k], rot[k] = p3, r["body_params_cam"]["rotations"]
         root[k], inst[k], valid[k] = r["body_params_cam"]["root_translation"], r["instance"], r["valid"]
     if not n:
         return {}
     return {"keypoints2d": torch.from_numpy(kp2), "keypoints3d_cam": torch.from_numpy(kp3),
+            "keypoints_mask": torch.from_numpy(CONVENTIONS[convention].mask),
             "body_rotations_cam": torch.from_numpy(rot), "body_root_cam": torch.from_numpy(root),
             "instances": torch.from_numpy(inst), "subjects_valid": torch.from_numpy(valid)}
 
