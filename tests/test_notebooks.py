@@ -8,7 +8,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 NOTEBOOKS = os.path.join(ROOT, "notebooks")
 TINY = {"01_quickstart": "SIZE = 48\nSPP = 2\nTEXTURE = 64",
         "02_texture_fitting": "SIZE = 24\nSTEPS = 3\nSPP = 2\nTARGET_SPP = 4",
-        "03_dataset": "ROOT = None\nCONFIG = '../configs/tiny.yaml'"}
+        "03_dataset": "ROOT = None\nCONFIG = '../configs/tiny.yaml'",
+        "04_training": "ROOT = None\nCONFIG = '../configs/tiny.yaml'\nSTEPS = 20\nSIZE = 64"}
 
 
 def _read(name):
