@@ -26,7 +26,7 @@ def main(res: int = 512, spp: int = 64) -> dict:
     import drjit as dr
 
     import synmitsuba as sm
-    from synmitsuba.compose.scenefile import load_scene_file
+    from synmitsuba.compose.scenefile_spec import load_scene_file
     from synmitsuba.engine.variant import thread_count
     sm.set_variant()
     dr.set_flag(dr.JitFlag.KernelHistory, True)

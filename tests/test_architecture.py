@@ -234,7 +234,7 @@ def test_scene_file_render_is_sequence_zero_of_generate(sm, tmp_path, tiny):
 def test_scene_file_spec_round_trips_and_rebuilds_the_same_scene(sm, tmp_path):
     """A scene file's SceneSpec, written and read back, builds the same meshes and curves; its
     subject shows the entry's ``frame`` first and stands on the ground."""
-    from synmitsuba.compose.scenefile import scene_spec
+    from synmitsuba.compose.scenefile_spec import scene_spec
     (tmp_path / "p.yaml").write_text(PEOPLE.replace("motion: walk", "motion: walk, frame: 7"))
     spec = scene_spec(str(tmp_path / "p.yaml"), str(tmp_path / "p.yaml"), sm.sequence_rng(0, 0))
     again = sm.SceneSpec.from_json(spec.to_json())

@@ -8,7 +8,7 @@ import pytest
 
 from synmitsuba.cli import main
 from synmitsuba.errors import ConfigError
-from synmitsuba.compose.scenefile import load_scene_file
+from synmitsuba.compose.scenefile_spec import load_scene_file
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCENE = textwrap.dedent("""

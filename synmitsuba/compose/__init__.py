@@ -3,8 +3,8 @@ placed in them, as a ``Scene`` ready to render; automatic composition (``compose
 environments, whole-clip placement, cameras scored by ray-cast occlusion, camera motion."""
 from synmitsuba._lazy import lazy_exports
 
-_EXPORTS = {"load_scene_file": "synmitsuba.compose.scenefile", "SceneFile": "synmitsuba.compose.scenefile",
-            "scene_spec": "synmitsuba.compose.scenefile",
+_EXPORTS = {"load_scene_file": "synmitsuba.compose.scenefile_spec", "SceneFile": "synmitsuba.compose.scenefile",
+            "scene_spec": "synmitsuba.compose.scenefile_spec",
             "add_subjects": "synmitsuba.compose.subjects", "SubjectEntry": "synmitsuba.compose.subjects",
             "PlacedSubject": "synmitsuba.compose.subjects", "compose_scene": "synmitsuba.compose.composition",
             "ComposeConfig": "synmitsuba.compose.composition", "SceneSpec": "synmitsuba.compose.spec",

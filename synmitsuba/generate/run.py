@@ -29,7 +29,7 @@ def sequence_spec(cfg: GenerateConfig, index: int):
     scene; every draw from ``sequence_rng(cfg.seed, index)``."""
     rng = sequence_rng(cfg.seed, index)
     if cfg.scene is not None:
-        from synmitsuba.compose.scenefile import scene_spec
+        from synmitsuba.compose.scenefile_spec import scene_spec
         return scene_spec(cfg.scene, cfg.scene, rng, seed=cfg.seed)
     from synmitsuba.compose.composition import compose_scene
     return compose_scene(cfg.compose, rng, seed=cfg.seed)
