@@ -351,3 +351,24 @@ def test_loader_keypoint_conventions(sm, tiny):
     assert whole["keypoints2d"].shape[1:] == (25, 3)
     with pytest.raises(ConfigError, match="keypoints = 'h36m'"):
         sm.SynDataset(tiny, keypoints="h36m")
+
+
+def test_loader_smpl24_joints_project_like_the_camera(sm, tiny):
+    """SMPL-24 joints: the anny joints SMPL's names pair with (pelvis = root, left hip =
+    upperleg01.L, ...), their 2D the camera's own projection of the world joints."""
+    from synmitsuba.annotate.conventions import smpl24_bones
+    from synmitsuba.body.anny_model import _static
+    bones = list(_static()["bones"])
+    idx = smpl24_bones()
+    assert [bones[i] for i in idx[:3]] == ["root", "upperleg01.L", "upperleg01.R"] and bones[idx[15]] == "head"
+    item = sm.SynDataset(tiny, modalities=["depth"], keypoints="smpl24")[0]
+    s = sm.read_sample(item["stem"])
+    rec = s.subjects[0]
+    uv, z = s.camera.project(np.asarray(rec["joints3d_world"])[idx])
+    kp = item["keypoints2d"][0].numpy()
+    assert kp.shape == (24, 3) and np.allclose(kp[:, :2], uv, atol=1e-3)
+    inside = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < s.camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < s.camera.height)
+    assert np.array_equal(kp[:, 2], inside.astype(np.float32))
+    assert np.allclose(item["keypoints3d_cam"][0].numpy(), np.asarray(rec["joints3d_cam"])[idx], atol=1e-5)
+    crop = sm.SynDataset(tiny, crop="person", size=64, keypoints="smpl24")[0]
+    assert crop["keypoints2d"].shape == (24, 3) and crop["keypoints_mask"].sum() == 24

@@ -2,7 +2,11 @@
 6 foot points) convert to, for training code written against another layout. A convention
 lists, per output point, the keypoints it is the mean of (none: not labelled, masked out).
 A derived point's visibility class is that of its sources when they agree, else 0 if any is
-outside the image, else the highest occlusion class among them."""
+outside the image, else the highest occlusion class among them.
+
+Joint conventions (``JOINT_CONVENTIONS``: ``smpl24``) take the subject's skeleton joints
+(``joints3d_*``, anny's bone heads) that correspond to SMPL's 24, as retargeting and the SMPL
+fits pair them; joints carry no occlusion class: 1 inside the image, 0 outside."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -48,6 +52,23 @@ CONVENTIONS: dict[str, Convention] = {
                                  tuple((i,) for i in range(len(KEYPOINTS))) + ((),) * len(_WHOLEBODY_REST)),
     "openpose25": _named(_BODY25),
 }
+
+
+JOINT_CONVENTIONS = ("smpl24",)
+
+
+def smpl24_bones() -> list[int]:
+    """anny bone index of each SMPL joint (``smplx_model.SMPL_JOINT_NAMES`` order)."""
+    from synmitsuba.body.anny_model import _static
+    from synmitsuba.body.smplx_model import SMPL_JOINT_NAMES
+    from synmitsuba.motion.names import body_model_to_anny
+    bones, pairs = list(_static()["bones"]), body_model_to_anny(SMPL_JOINT_NAMES)
+    return [bones.index(pairs[n]) for n in SMPL_JOINT_NAMES]
+
+
+def joint_names(convention: str) -> tuple[str, ...]:
+    from synmitsuba.body.smplx_model import SMPL_JOINT_NAMES
+    return tuple(SMPL_JOINT_NAMES)
 
 
 def convert_keypoints(points: np.ndarray, classes: np.ndarray, convention: str) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,8 @@ last).
   ``K`` (the camera's, shifted and scaled), ``center``, ``scale``.
 - ``keypoints``: the layout of ``keypoints2d`` / ``keypoints3d_cam``: ``ours`` (23), ``coco17``,
   ``coco_wholebody`` (133; face and hands masked out), ``openpose25`` (neck and mid-hip the
-  means of shoulders and hips); ``keypoints_mask`` says which points are labelled
+  means of shoulders and hips), ``smpl24`` (the skeleton joints SMPL's 24 correspond to,
+  projected; no occlusion class: 1 inside the image, 0 outside); ``keypoints_mask`` says which points are labelled
   (``annotate.conventions``).
 - After ``synmitsuba fit-smplx`` (or a generation with ``smplx.enabled``), items also hold each
   fitted model's camera-frame parameters in the smplx package's names, ``smplx_betas``,
@@ -61,9 +62,9 @@ class _Base:
             raise ConfigError("image", image, f"use one of {', '.join(IMAGE_FORMATS)}")
         if visibility not in VISIBILITY_CODES:
             raise ConfigError("visibility", visibility, f"use one of {', '.join(VISIBILITY_CODES)}")
-        from synmitsuba.annotate.conventions import CONVENTIONS
-        if keypoints not in CONVENTIONS:
-            raise ConfigError("keypoints", keypoints, f"use one of {', '.join(CONVENTIONS)}")
+        from synmitsuba.annotate.conventions import CONVENTIONS, JOINT_CONVENTIONS
+        if keypoints not in (*CONVENTIONS, *JOINT_CONVENTIONS):
+            raise ConfigError("keypoints", keypoints, f"use one of {', '.join((*CONVENTIONS, *JOINT_CONVENTIONS))}")
         self.image, self.visibility, self.keypoints = image, visibility, keypoints
         self.mean, self.std = np.asarray(mean, np.float32), np.asarray(std, np.float32)
         self.stems = dataset_samples(root, "root")
@@ -106,7 +107,7 @@ class _Base:
             arr = self._format(arr) if name == "rgb" else arr
             t = torch.from_numpy(np.ascontiguousarray(arr))
             item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
-        item.update(_subjects(s.subjects, self.max_subjects, self.visibility, self.keypoints))
+        item.update(_subjects(s.subjects, self.max_subjects, self.visibility, self.keypoints, s.camera))
         for kind, blank in self.body_models.items():
             rows = [_body_model(r, kind, blank) for r in s.subjects[:self.max_subjects]]
             rows += [(blank, False)] * (self.max_subjects - len(rows))
@@ -125,7 +126,7 @@ class _Base:
         A = np.array([[f, 0, -f * x0], [0, f, -f * y0], [0, 0, 1.0]])  # image pixels -> crop pixels
         image = _warp(s.rgb, A, self.size)
         mask = _warp((s.instance == rec["instance"]).astype(np.float32)[..., None], A, self.size)[..., 0] > 0.5
-        kp2, kp3, vis, kmask = _keypoints(rec, self.keypoints)
+        kp2, kp3, vis, kmask = _keypoints(rec, self.keypoints, s.camera)
         kp = np.concatenate([(kp2 * f - [f * x0, f * y0]) * kmask[:, None], _codes(vis, self.visibility)[:, None]], 1)
         return {"image": torch.from_numpy(np.ascontiguousarray(self._format(image.astype(np.float32)).transpose(2, 0, 1))),
                 "mask": torch.from_numpy(mask), "keypoints2d": torch.from_numpy(kp.astype(np.float32)),
@@ -212,33 +213,40 @@ def _codes(classes: np.ndarray, visibility: str) -> np.ndarray:
     return np.asarray(classes) if visibility == "classes" else coco_flags(classes)
 
 
-def _keypoints(rec, convention: str):
+def _keypoints(rec, convention: str, camera):
     """(2D (K, 2), 3D camera frame (K, 3), classes (K,), mask (K,)) in ``convention``."""
-    from synmitsuba.annotate.conventions import CONVENTIONS, convert_keypoints
+    from synmitsuba.annotate.conventions import CONVENTIONS, JOINT_CONVENTIONS, convert_keypoints, smpl24_bones
+    if convention in JOINT_CONVENTIONS:  # skeleton joints, projected; inside the image or not
+        cam = np.asarray(rec["joints3d_cam"])[smpl24_bones()]
+        uvw = cam @ camera.K.T
+        uv = uvw[:, :2] / np.where(np.abs(uvw[:, 2:]) > 1e-9, uvw[:, 2:], 1e-9)
+        inside = (cam[:, 2] > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)
+        return uv, cam, inside.astype(np.uint8), np.ones(len(cam), np.uint8)
     both = np.concatenate([np.asarray(rec["keypoints2d"]), np.asarray(rec["keypoints3d_cam"])], 1)
     pts, vis = convert_keypoints(both, rec["visibility"], convention)
     return pts[:, :2], pts[:, 2:], vis, CONVENTIONS[convention].mask
 
 
-def _subjects(records: list, n: int, visibility: str = "classes", convention: str = "ours") -> dict:
-    from synmitsuba.annotate.conventions import CONVENTIONS
+def _subjects(records: list, n: int, visibility: str = "classes", convention: str = "ours", camera=None) -> dict:
+    from synmitsuba.annotate.conventions import CONVENTIONS, joint_names
     torch = _torch()
     J = len(records[0]["body_params_cam"]["rotations"]) if records else 0
-    K = len(CONVENTIONS[convention].names)
+    K = len(CONVENTIONS[convention].names) if convention in CONVENTIONS else len(joint_names(convention))
     kp2 = np.zeros((n, K, 3), np.float32)
     kp3 = np.zeros((n, K, 3), np.float32)
     rot = np.zeros((n, J, 3), np.float32)
     root = np.zeros((n, 3), np.float32)
     inst, valid = np.zeros(n, np.int64), np.zeros(n, bool)
     for k, r in enumerate(records[:n]):
-        p2, p3, vis, _ = _keypoints(r, convention)
+        p2, p3, vis, _ = _keypoints(r, convention, camera)
         kp2[k] = np.concatenate([p2, _codes(vis, visibility)[:, None]], 1)
         kp3[k], rot[k] = p3, r["body_params_cam"]["rotations"]
         root[k], inst[k], valid[k] = r["body_params_cam"]["root_translation"], r["instance"], r["valid"]
     if not n:
         return {}
     return {"keypoints2d": torch.from_numpy(kp2), "keypoints3d_cam": torch.from_numpy(kp3),
-            "keypoints_mask": torch.from_numpy(CONVENTIONS[convention].mask),
+            "keypoints_mask": torch.from_numpy(CONVENTIONS[convention].mask if convention in CONVENTIONS
+                                               else np.ones(K, np.uint8)),
             "body_rotations_cam": torch.from_numpy(rot), "body_root_cam": torch.from_numpy(root),
             "instances": torch.from_numpy(inst), "subjects_valid": torch.from_numpy(valid)}
 
