@@ -359,7 +359,7 @@ def test_loader_smpl24_joints_project_like_the_camera(sm, tiny):
     from synmitsuba.annotate.conventions import smpl24_bones
     from synmitsuba.body.anny_model import _static
     bones = list(_static()["bones"])
-    idx = smpl24_bones()
+    idx = list(smpl24_bones())
     assert [bones[i] for i in idx[:3]] == ["root", "upperleg01.L", "upperleg01.R"] and bones[idx[15]] == "head"
     item = sm.SynDataset(tiny, modalities=["depth"], keypoints="smpl24")[0]
     s = sm.read_sample(item["stem"])

@@ -9,6 +9,7 @@ Joint conventions (``JOINT_CONVENTIONS``: ``smpl24``) take the subject's skeleto
 fits pair them; joints carry no occlusion class: 1 inside the image, 0 outside."""
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,13 +58,14 @@ CONVENTIONS: dict[str, Convention] = {
 JOINT_CONVENTIONS = ("smpl24",)
 
 
-def smpl24_bones() -> list[int]:
+@functools.cache
+def smpl24_bones() -> tuple[int, ...]:
     """anny bone index of each SMPL joint (``smplx_model.SMPL_JOINT_NAMES`` order)."""
     from synmitsuba.body.anny_model import _static
     from synmitsuba.body.smplx_model import SMPL_JOINT_NAMES
     from synmitsuba.motion.names import body_model_to_anny
     bones, pairs = list(_static()["bones"]), body_model_to_anny(SMPL_JOINT_NAMES)
-    return [bones.index(pairs[n]) for n in SMPL_JOINT_NAMES]
+    return tuple(bones.index(pairs[n]) for n in SMPL_JOINT_NAMES)
 
 
 def joint_names(convention: str) -> tuple[str, ...]:

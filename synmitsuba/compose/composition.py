@@ -13,7 +13,7 @@ from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose import cameras as cams
 from synmitsuba.compose.environments import environment_names, load_environment, object_boxes, sample_lighting
 from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
-from synmitsuba.compose.occlusion import score_views
+from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
 from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, clip_bounds
@@ -135,7 +135,7 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
     group = _group(spec_.subjects, cfg.target_height)
     trajs = cams.ring(group, 0, cfg, rng) if cfg.mode == "ring" else cams.candidates(group, boxes, cfg, rng)
     cams.check_count(len(trajs), cfg, group)
-    frames = sorted({int(round(x)) for x in np.linspace(0, spec_.n_frames - 1, min(cfg.score_frames, spec_.n_frames))})
+    frames = score_frames(spec_.n_frames, cfg.score_frames)
     scene, placed = spec_.build()
     at = [lambda f, t=t: (t.eye[f], _camera_at(t, f, cfg)) for t in trajs]
     occ, seen = score_views(scene, placed, at, frames, cfg.points, rng)

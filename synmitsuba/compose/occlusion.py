@@ -47,6 +47,11 @@ def in_view(camera: Camera, points: np.ndarray) -> float:
     return float(ok.mean())
 
 
+def score_frames(n_frames: int, count: int) -> list[int]:
+    """Up to ``count`` clip frames spread evenly over ``n_frames``, where views are scored."""
+    return sorted({int(round(x)) for x in np.linspace(0, n_frames - 1, min(count, n_frames))})
+
+
 def score_views(scene, placed: list, views: list, frames: list, points: int,
                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Occlusion and in-view share (V, S) of every view for every placed subject, averaged

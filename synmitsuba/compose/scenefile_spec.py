@@ -31,7 +31,7 @@ def scene_spec(doc: SceneDoc | str, path: str, rng: np.random.Generator, seed: i
     those without one, a motion seed each) and placed as written, each camera a static view
     scored for occlusion like a composed scene's. ``seed`` is only recorded."""
     from synmitsuba.compose.cameras import CameraConfig
-    from synmitsuba.compose.occlusion import score_views
+    from synmitsuba.compose.occlusion import score_frames, score_views
     doc = read_scene_doc(doc) if isinstance(doc, str) else doc
     path = os.path.abspath(path)
     subjects, humans = subject_specs(doc.subjects, rng, set(doc.object_instances()), os.path.dirname(path), doc.clip)
@@ -39,7 +39,7 @@ def scene_spec(doc: SceneDoc | str, path: str, rng: np.random.Generator, seed: i
     spec_ = SceneSpec(path, None, 0, subjects, [], n_frames, doc.clip.fps, [], seed, stage="scene_file")
     scene, placed = spec_.build(humans)
     cams, cfg = scene_cameras(doc), CameraConfig()
-    frames = sorted({int(round(x)) for x in np.linspace(0, n_frames - 1, min(cfg.score_frames, n_frames))})
+    frames = score_frames(n_frames, cfg.score_frames)
     at = [lambda f, c=c: (c.center, c) for _, c in cams]
     occ, seen = score_views(scene, placed, at, frames, cfg.points, rng)
     spec_.views = [ViewSpec(name, "static", [cam] * n_frames, occ[k], seen[k],

@@ -217,7 +217,7 @@ def _keypoints(rec, convention: str, camera):
     """(2D (K, 2), 3D camera frame (K, 3), classes (K,), mask (K,)) in ``convention``."""
     from synmitsuba.annotate.conventions import CONVENTIONS, JOINT_CONVENTIONS, convert_keypoints, smpl24_bones
     if convention in JOINT_CONVENTIONS:  # skeleton joints, projected; inside the image or not
-        cam = np.asarray(rec["joints3d_cam"])[smpl24_bones()]
+        cam = np.asarray(rec["joints3d_cam"])[list(smpl24_bones())]
         uvw = cam @ camera.K.T
         uv = uvw[:, :2] / np.where(np.abs(uvw[:, 2:]) > 1e-9, uvw[:, 2:], 1e-9)
         inside = (cam[:, 2] > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)

@@ -10,8 +10,8 @@ import os
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.io.overlay import VIS_COLOURS  # the panels' colours: one code table for every picture
 
-VIS_RGB = {0: (128, 128, 128), 1: (40, 220, 60), 2: (250, 210, 30), 3: (240, 40, 40), 4: (40, 120, 250)}
 
 
 def _rerun():
@@ -78,7 +78,7 @@ def _log_view(rr, rec, s, path: str) -> None:
         vis = np.asarray(r["visibility"])
         shown = vis > 0
         rec.log(f"{path}/image/keypoints/{r['instance']}",
-                rr.Points2D(np.asarray(r["keypoints2d"])[shown], colors=[VIS_RGB[int(v)] for v in vis[shown]], radii=2.0))
+                rr.Points2D(np.asarray(r["keypoints2d"])[shown], colors=[VIS_COLOURS[int(v)] for v in vis[shown]], radii=2.0))
         boxes = [r[k] for k in ("bbox_visible", "bbox_amodal") if r[k] is not None]
         if boxes:
             rec.log(f"{path}/image/boxes/{r['instance']}", rr.Boxes2D(array=boxes, array_format=rr.Box2DFormat.XYXY,
@@ -89,7 +89,7 @@ def _log_world(rr, rec, s, bodies: dict, frame: int) -> None:
     for r in s.subjects:
         vis = np.asarray(r["visibility"])
         rec.log(f"world/subjects/{r['instance']}/keypoints",
-                rr.Points3D(np.asarray(r["keypoints3d_world"]), colors=[VIS_RGB[int(v)] for v in vis], radii=0.02))
+                rr.Points3D(np.asarray(r["keypoints3d_world"]), colors=[VIS_COLOURS[int(v)] for v in vis], radii=0.02))
     for instance, (human, motion) in bodies.items():
         rot, root = motion.frame(frame % motion.n_frames)
         body = next(layer for layer in human.pose(rot, root) if layer.name == "body")
