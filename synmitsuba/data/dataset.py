@@ -108,12 +108,10 @@ class _Base:
             t = torch.from_numpy(np.ascontiguousarray(arr))
             item[name] = t.permute(2, 0, 1) if t.ndim == 3 else t
         item.update(_subjects(s.subjects, self.max_subjects, self.visibility, self.keypoints, s.camera))
-        for kind, blank in self.body_models.items():
-            rows = [_body_model(r, kind, blank) for r in s.subjects[:self.max_subjects]]
-            rows += [(blank, False)] * (self.max_subjects - len(rows))
-            item[f"{kind}_valid"] = torch.tensor([ok for _, ok in rows])
-            for key in blank:
-                item[f"{kind}_{key}"] = torch.from_numpy(np.stack([p[key] for p, _ in rows]).astype(np.float32))
+        if self.body_models and self.max_subjects:  # per subject row, padded like the keypoints
+            rows = [self._fits(r) for r in s.subjects[:self.max_subjects]]
+            rows += [self._fits(None)] * (self.max_subjects - len(rows))
+            item.update({k: torch.stack([r[k] for r in rows]) for k in rows[0]})
         item.update(K=torch.from_numpy(s.camera.K), R=torch.from_numpy(s.camera.R), t=torch.from_numpy(s.camera.t),
                     stem=stem)
         return item
@@ -139,7 +137,7 @@ class _Base:
 
     def _fits(self, rec) -> dict:
         """``<kind>_<parameter>`` (camera frame) of each body model fitted in the dataset, and
-        ``<kind>_valid`` (False: zeros, this subject has no fit for this frame)."""
+        ``<kind>_valid`` (False: zeros, this subject (or a padding row, ``None``) has no fit)."""
         torch = _torch()
         out = {}
         for kind, blank in self.body_models.items():
@@ -166,7 +164,7 @@ BODY_MODEL_KEYS = ("betas", "global_orient", "body_pose", "transl", "jaw_pose", 
 
 def _body_model(rec, kind: str, blank: dict) -> tuple[dict, bool]:
     """A record's ``<kind>_cam`` parameters (the smplx package's names) and whether it has them."""
-    params = rec.get(f"{kind}_cam") if hasattr(rec, "get") else None
+    params = None if rec is None else rec.get(f"{kind}_cam")
     if not params:
         return blank, False
     return {k: np.asarray(params[k], np.float32) for k in blank}, True
