@@ -58,11 +58,11 @@ def output_dir(path: str, option: str = "--out") -> str:
     return path
 
 
-def output_file(path: str, option: str = "--out") -> str:
+def output_file(path: str, option: str = "--out", suffix: str = ".png") -> str:
     """Make sure a file can be written at ``path`` (its folder is created)."""
     output_dir(os.path.dirname(os.path.abspath(path)), option)
     if os.path.isdir(path):
-        raise ConfigError(option, path, "this is a folder; give a file name ending in .png")
+        raise ConfigError(option, path, f"this is a folder; give a file name ending in {suffix}")
     return path
 
 

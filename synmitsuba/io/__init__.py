@@ -6,7 +6,7 @@ _EXPORTS = {"write_sample": "synmitsuba.io.exr", "read_sample": "synmitsuba.io.e
             "list_samples": "synmitsuba.io.listing",
             "to_srgb8": "synmitsuba.io.preview", "write_png": "synmitsuba.io.preview",
             "contact_sheet": "synmitsuba.io.preview", "export_coco": "synmitsuba.io.coco",
-            "export_humandata": "synmitsuba.io.coco",
+            "export_humandata": "synmitsuba.io.humandata",
             "sample_panel": "synmitsuba.io.overlay"}
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 __all__ = sorted(_EXPORTS)

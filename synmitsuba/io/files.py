@@ -13,7 +13,9 @@ ACTIVE_TEMPORARIES: set = set()
 @contextlib.contextmanager
 def atomic_path(path: str):
     """A temporary name beside ``path`` (same extension) renamed to ``path`` when the block
-    ends cleanly, removed when it does not (an error, Ctrl-C): a file is complete or absent."""
+    ends cleanly, removed when it does not (an error, Ctrl-C): a file is complete or absent.
+    The file's folder is created."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     root, ext = os.path.splitext(os.fspath(path))
     tmp = f"{root}.tmp-{os.getpid()}{ext}"
     ACTIVE_TEMPORARIES.add(tmp)
