@@ -22,6 +22,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.errors import ConfigError
+from synmitsuba.scene.lens import LENS_MODELS
 from synmitsuba.schema import Choice, ListOf, Number, Params, POSITIVE, Range, spec
 
 @dataclass
@@ -107,6 +108,13 @@ class CameraConfig(Params):
     zoom: list = spec(factory=lambda: [0.7, 1.4], check=Range(0.2, 5), doc="dolly_zoom: final/initial focal length")
     shake_m: float = spec(0.03, Number(0, 1), doc="handheld: position noise amplitude, metres")
     shake_deg: float = spec(1.0, Number(0, 10), doc="handheld: rotation noise amplitude, degrees")
+    lens: str = spec("brown_conrady", Choice(tuple(LENS_MODELS)), doc="distortion model (OpenCV's): or fisheye")
+    distortion: list = spec(factory=lambda: [0.0, 0.0], check=Range(-0.5, 0.5),
+                            doc="k1 range per view (0 = off; negative: barrel)")
+    distortion_k2: list = spec(factory=lambda: [0.0, 0.0], check=Range(-0.2, 0.2), doc="k2 range per view")
+    tangential: float = spec(0.0, Number(0, 0.01), doc="brown_conrady: max |p1|, |p2| per view")
+    aperture_radius: list = spec(factory=lambda: [0.0, 0.0], check=Range(0, 0.1),
+                                 doc="thin-lens aperture radius range, metres (0 = all in focus); focus on the subjects")
 
 
 @dataclass
@@ -205,6 +213,28 @@ def bounds_ok(traj: Trajectory, group: Group, object_boxes: np.ndarray, cfg: Cam
 def sample_intrinsics(cfg: CameraConfig, rng: np.random.Generator) -> np.ndarray:
     shift = rng.uniform(-cfg.principal_jitter, cfg.principal_jitter, 2) if cfg.principal_jitter else (0.0, 0.0)
     return intrinsics(rng.uniform(*cfg.hfov_deg), cfg.width, cfg.height, shift)
+
+
+@dataclass
+class Optics:
+    """A view's lens: distortion model and coefficients, thin-lens aperture radius (metres)."""
+
+    lens: str = "brown_conrady"
+    dist: np.ndarray | None = None
+    aperture_radius: float = 0.0
+
+
+def sample_optics(cfg: CameraConfig, rng: np.random.Generator) -> Optics:
+    """A view's optics drawn from the config's ranges; nothing is drawn for what is off, so a
+    config without lens effects composes exactly as before they existed."""
+    n = len(LENS_MODELS[cfg.lens].coefficients)
+    dist = np.zeros(n)
+    if any(cfg.distortion) or any(cfg.distortion_k2):
+        dist[0], dist[1] = rng.uniform(*cfg.distortion), rng.uniform(*cfg.distortion_k2)
+    if cfg.tangential and cfg.lens == "brown_conrady":
+        dist[2:4] = rng.uniform(-cfg.tangential, cfg.tangential, 2)
+    aperture = float(rng.uniform(*cfg.aperture_radius)) if any(cfg.aperture_radius) else 0.0
+    return Optics(cfg.lens, dist, aperture)
 
 
 def candidates(group: Group, object_boxes: np.ndarray, cfg: CameraConfig, rng: np.random.Generator) -> list:

@@ -76,9 +76,17 @@ def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
     return cams.Group(centres, centre, boxes, frame_boxes)
 
 
-def _camera_at(t: cams.Trajectory, f: int, cfg: cams.CameraConfig):
+def _camera_at(t: cams.Trajectory, f: int, cfg: cams.CameraConfig, optics: cams.Optics | None = None,
+               focus_at: np.ndarray | None = None):
+    """The trajectory's camera at frame f; with ``optics``, its lens, focused at the depth of
+    ``focus_at`` (the subjects' centre at that frame)."""
     from synmitsuba.scene.camera import Camera
-    return Camera.look_at(t.eye[f], t.target[f], t.up[f], width=cfg.width, height=cfg.height, K=t.K[f])
+    cam = Camera.look_at(t.eye[f], t.target[f], t.up[f], width=cfg.width, height=cfg.height, K=t.K[f])
+    if optics is None:
+        return cam
+    focused = optics.aperture_radius > 0 and focus_at is not None
+    focus = max(float((cam.R @ focus_at + cam.t)[2]), 0.1) if focused else 1.0
+    return Camera(cam.K, cam.R, cam.t, cam.width, cam.height, optics.lens, optics.dist, optics.aperture_radius, focus)
 
 
 def _azimuth(t: cams.Trajectory, centre: np.ndarray) -> float:
@@ -146,8 +154,9 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
     for k, c in enumerate(chosen):
         t = trajs[c]
         valid = (occ[c] <= cfg.occlusion_max) & (seen[c] >= cfg.in_view_min)
-        views.append(ViewSpec(f"cam{k}", t.kind, [_camera_at(t, f, cfg) for f in range(spec_.n_frames)],
-                              occ[c], seen[c], valid))
+        optics = cams.sample_optics(cfg, rng)
+        views.append(ViewSpec(f"cam{k}", t.kind, [_camera_at(t, f, cfg, optics, group.centres[f])
+                                                  for f in range(spec_.n_frames)], occ[c], seen[c], valid))
     for p in placed:
         p.pose_in(scene, 0)
     return views, frames

@@ -17,6 +17,7 @@ import numpy as np
 from synmitsuba.compose.subjects import ClipSettings, PlacedSubject, SubjectEntry, subject_instances
 from synmitsuba.errors import ConfigError
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
+from synmitsuba.scene.lens import LENS_MODELS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
                                construct, mapping, optional, read_yaml, spec)
 from synmitsuba.scene import (AreaLight, Camera, Constant, DirectionalLight, EnvMap, Layer, Material, PointLight,
@@ -99,6 +100,11 @@ class CameraSpec(Params):
     t: list | None = spec(None, optional(Vector(3)))
     width: int | None = spec(None, optional(POSITIVE))
     height: int | None = spec(None, optional(POSITIVE))
+    lens: str = spec("brown_conrady", Choice(tuple(LENS_MODELS)), doc="distortion model (OpenCV's)")
+    dist: list | None = spec(None, optional(ListOf(Number(-10, 10))),
+                             doc="distortion coefficients: k1, k2, p1, p2, k3 (fisheye: k1..k4)")
+    aperture_radius: float = spec(0.0, Number(0, 1), doc="thin-lens aperture radius, metres (0: pinhole)")
+    focus_distance: float = spec(1.0, Number(0.01, 1e4), doc="metres along the optical axis")
 
     def __post_init__(self):
         if (self.look_at is None) == (self.K is None):
@@ -194,16 +200,18 @@ def _camera(spec_: CameraSpec, where: str, settings: RenderSettings) -> tuple[st
     w = settings.width if spec_.width is None else spec_.width
     h = settings.height if spec_.height is None else spec_.height
     name = spec_.name or where.replace("[", "_").replace("]", "")
+    optics = {"lens": spec_.lens, "dist": spec_.dist, "aperture_radius": spec_.aperture_radius,
+              "focus_distance": spec_.focus_distance}
     if spec_.look_at is not None:
         la = spec_.look_at
         try:
             cam = Camera.look_at(eye=la.eye, target=la.target, up=la.up, fov_y_deg=la.fov_y_deg, width=w, height=h)
         except ConfigError as exc:
             raise ConfigError(f"{where}.look_at.{exc.field.split('.')[-1]}", exc.value, exc.fix) from None
-        return name, cam
+        return name, construct(Camera, {"K": cam.K, "R": cam.R, "t": cam.t, "width": w, "height": h, **optics}, where)
     R = np.eye(3) if spec_.R is None else spec_.R
     t = [0.0, 0.0, 0.0] if spec_.t is None else spec_.t
-    return name, construct(Camera, {"K": spec_.K, "R": R, "t": t, "width": w, "height": h}, where)
+    return name, construct(Camera, {"K": spec_.K, "R": R, "t": t, "width": w, "height": h, **optics}, where)
 
 
 def read_scene_doc(path: str) -> SceneDoc:

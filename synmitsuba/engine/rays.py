@@ -44,10 +44,29 @@ def camera_rays(camera: Camera, per_pixel: int = 1, seed: int | None = None, pix
                        initseq=dr.opaque(mi.UInt64, seed) + ray_id - lane)
         ox = (mi.Float(k % cols) + rng.next_float32()) / cols
         oy = (mi.Float(k // cols) + rng.next_float32()) / rows
-    M, o = mi.Matrix3f(camera.ray_matrix.tolist()), mi.Point3f(*[float(c) for c in camera.center])
-    dr.make_opaque(M, o)  # as values, not literals: another camera reuses the compiled kernels
-    d = dr.normalize(M @ mi.Vector3f(x + ox, y + oy, 1.0))
+    o = mi.Point3f(*[float(c) for c in camera.center])
+    dr.make_opaque(o)
+    d = pixel_directions(camera, x + ox, y + oy)
     return mi.Ray3f(o, d), d
+
+
+def pixel_directions(camera: Camera, u, v):
+    """Unit world directions (drjit) of the rays through pixel coordinates ``u``, ``v``: the
+    pinhole's ``R^T K^-1 [u, v, 1]``, or through the camera's lens distortion. The camera's
+    numbers are opaque values, not literals: another camera reuses the compiled kernels."""
+    import drjit as dr
+    import mitsuba as mi
+    if not camera.distorted:
+        M = mi.Matrix3f(camera.ray_matrix.tolist())
+        dr.make_opaque(M)
+        return dr.normalize(M @ mi.Vector3f(u, v, 1.0))
+    from synmitsuba.scene.lens import LENS_MODELS, drjit_ops
+    Kinv, Rt = mi.Matrix3f(np.linalg.inv(camera.K).tolist()), mi.Matrix3f(camera.R.T.tolist())
+    k = [mi.Float(float(c)) for c in np.asarray(camera.dist)]
+    dr.make_opaque(Kinv, Rt, *k)
+    n = Kinv @ mi.Vector3f(u, v, 1.0)
+    dx, dy, dz = LENS_MODELS[camera.lens].direction(n.x, n.y, k, drjit_ops())
+    return dr.normalize(Rt @ mi.Vector3f(dx, dy, dz))
 
 
 def pixel_centre_rays(camera: Camera) -> np.ndarray:

@@ -1,17 +1,24 @@
-"""Pinhole cameras in the OpenCV convention.
+"""Cameras in the OpenCV convention: pinhole, optionally with lens distortion and a thin lens.
 
 Camera frame: x right, y down, z forward. ``K`` is 3x3 in pixels with pixel centres at
 integer + 0.5 (pixel (0, 0) spans [0, 1) x [0, 1)). ``R``, ``t`` map world to camera:
 ``x_cam = R @ x_world + t``. Any K works (off-centre principal point, fx != fy, skew).
+``dist`` are OpenCV's distortion coefficients of the ``lens`` model (``scene.lens``):
+``cv2.projectPoints`` (``cv2.fisheye.projectPoints``) with K, dist, R and t gives
+``Camera.project``. ``aperture_radius`` (metres, 0 = pinhole) and ``focus_distance`` (metres
+along the optical axis) make a thin lens for the RGB only: exact passes and labels use the ray
+through the lens centre.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import camera_ray_matrix, frame
+from synmitsuba.scene.lens import LENS_MODELS, NUMPY_OPS
 from synmitsuba.schema import POSITIVE as PIXELS
 
 
@@ -27,13 +34,18 @@ def _matrix(name: str, value, shape) -> np.ndarray:
 
 @dataclass
 class Camera:
-    """A pinhole camera: intrinsics ``K`` (pixels), world->camera ``R``, ``t``, image size."""
+    """A camera: intrinsics ``K`` (pixels), world->camera ``R``, ``t``, image size, lens
+    distortion (``lens`` model, ``dist`` coefficients) and thin-lens depth of field."""
 
     K: np.ndarray
     R: np.ndarray = field(default_factory=lambda: np.eye(3))
     t: np.ndarray = field(default_factory=lambda: np.zeros(3))
     width: int = 320
     height: int = 240
+    lens: str = "brown_conrady"
+    dist: np.ndarray | None = None      # the model's coefficients; None: zeros (a pinhole)
+    aperture_radius: float = 0.0        # metres; 0: everything in focus
+    focus_distance: float = 1.0         # metres along the optical axis
 
     def __post_init__(self):
         self.K = _matrix("camera.K", self.K, (3, 3))
@@ -41,6 +53,14 @@ class Camera:
         self.t = _matrix("camera.t", self.t, (3,))
         self.width = PIXELS("camera.width", self.width)
         self.height = PIXELS("camera.height", self.height)
+        if self.lens not in LENS_MODELS:
+            raise ConfigError("camera.lens", self.lens, f"use one of {', '.join(LENS_MODELS)}")
+        n = len(LENS_MODELS[self.lens].coefficients)
+        self.dist = np.zeros(n) if self.dist is None else _matrix("camera.dist", self.dist, (n,))
+        if not (np.isfinite(self.aperture_radius) and self.aperture_radius >= 0):
+            raise ConfigError("camera.aperture_radius", self.aperture_radius, "give a radius >= 0 in metres")
+        if not (np.isfinite(self.focus_distance) and self.focus_distance > 0):
+            raise ConfigError("camera.focus_distance", self.focus_distance, "give a distance > 0 in metres")
         if not np.allclose(self.K[2], [0, 0, 1]):
             raise ConfigError("camera.K", self.K.tolist(), "the last row of K must be [0, 0, 1]")
         if self.K[0, 0] <= 0 or self.K[1, 1] <= 0:
@@ -77,6 +97,11 @@ class Camera:
         K = cls.intrinsics(fov_y_deg, width, height) if K is None else K
         return cls(K=K, R=R, t=-R @ eye, width=width, height=height)
 
+    @property
+    def distorted(self) -> bool:
+        """Whether any distortion coefficient is non-zero (else rays are the pinhole's, bit for bit)."""
+        return bool(np.any(self.dist))
+
     # -- geometry ----------------------------------------------------------------------
     @property
     def center(self) -> np.ndarray:
@@ -91,6 +116,11 @@ class Camera:
     def project(self, points) -> tuple[np.ndarray, np.ndarray]:
         """World points (N, 3) -> pixel coordinates (N, 2) and z-depth (N,)."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3) @ self.R.T + self.t
+        if self.distorted:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                xd, yd = LENS_MODELS[self.lens].distort(p[:, 0] / p[:, 2], p[:, 1] / p[:, 2], self.dist, NUMPY_OPS)
+            uvw = np.stack([xd, yd, np.ones_like(xd)], 1) @ self.K.T
+            return uvw[:, :2], p[:, 2]
         uvw = p @ self.K.T
         return uvw[:, :2] / uvw[:, 2:3], p[:, 2]
 
@@ -101,19 +131,27 @@ class Camera:
         pix = np.stack([u, v], -1)
         pix = pix + (0.5 if offsets is None else np.asarray(offsets))
         ones = np.ones(pix.shape[:-1] + (1,))
-        d = np.concatenate([pix, ones], -1) @ self.ray_matrix.T
+        if self.distorted:
+            n = np.concatenate([pix, ones], -1) @ np.linalg.inv(self.K).T
+            d = np.stack(LENS_MODELS[self.lens].direction(n[..., 0], n[..., 1], self.dist, NUMPY_OPS), -1) @ self.R
+        else:
+            d = np.concatenate([pix, ones], -1) @ self.ray_matrix.T
         return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
     def resized(self, width: int, height: int) -> "Camera":
         """The same camera at another resolution (K scaled per axis)."""
         S = np.diag([width / self.width, height / self.height, 1.0])
-        return Camera(K=S @ self.K, R=self.R, t=self.t, width=width, height=height)
+        return dataclasses.replace(self, K=S @ self.K, width=width, height=height)
 
     # -- serialization -----------------------------------------------------------------
     def to_dict(self) -> dict:
         return {"K": self.K.tolist(), "R": self.R.tolist(), "t": self.t.tolist(),
-                "width": self.width, "height": self.height, "convention": "opencv_world_to_camera"}
+                "width": self.width, "height": self.height, "convention": "opencv_world_to_camera",
+                "lens": self.lens, "dist": np.asarray(self.dist).tolist(),
+                "aperture_radius": float(self.aperture_radius), "focus_distance": float(self.focus_distance)}
 
     @classmethod
     def from_dict(cls, d: dict) -> "Camera":
-        return cls(K=d["K"], R=d["R"], t=d["t"], width=d["width"], height=d["height"])
+        return cls(K=d["K"], R=d["R"], t=d["t"], width=d["width"], height=d["height"],
+                   lens=d.get("lens", "brown_conrady"), dist=d.get("dist"),
+                   aperture_radius=d.get("aperture_radius", 0.0), focus_distance=d.get("focus_distance", 1.0))
