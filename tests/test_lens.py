@@ -79,6 +79,7 @@ def test_distorted_exact_passes_land_where_the_projection_puts_them(sm):
     assert moved.mean() > 0.3  # away from the centre every pixel sees another point
 
 
+@pytest.mark.filterwarnings("ignore:the camera sees no geometry")  # the emitter alone: lights are not geometry
 def test_depth_of_field_blurs_a_point_by_the_circle_of_confusion(sm):
     """A 4 mm emitter 2 m away, focus at 1 m, aperture radius a: its image is a disc of radius
     f a |1/z - 1/s| pixels (thin lens); its per-axis spread is sqrt(rho^2 / 4 + the emitter's
@@ -122,6 +123,22 @@ def test_camera_lens_round_trips_and_bad_values_name_the_field(sm):
         _camera(sm, focus_distance=0.0)
 
 
+def test_a_lens_that_folds_back_is_refused_and_points_past_its_fold_stay_outside(sm):
+    """r (1 + k1 r^2) with k1 = -0.4 stops growing at r^2 = 1 / 1.2: corners past it would have
+    no ray, so such a camera is refused; points past the fold project far outside, where OpenCV
+    folds them back into the image."""
+    import cv2
+    with pytest.raises(ConfigError, match="camera.dist.*folds back"):
+        sm.Camera(
+            K=[[60.0, 0, 80], [0, 60, 60], [0, 0, 1]], width=160, height=120, dist=[-0.4, 0, 0, 0, 0])
+    cam = sm.Camera(K=[[200.0, 0, 80], [0, 200, 60], [0, 0, 1]], width=160, height=120, dist=[-0.4, 0, 0, 0, 0])
+    X = np.array([[1.4, 0.0, 1.0], [0.3, 0.1, 1.0]])  # r^2 = 1.96 past the fold (0.83), and one inside
+    uv, _ = cam.project(X)
+    ref = cv2.projectPoints(X, np.zeros(3), np.zeros(3), cam.K, cam.dist)[0][:, 0]
+    assert 0 <= ref[0, 0] < 160 and uv[0, 0] > 1e4  # OpenCV folds it into the image; we keep it out
+    assert np.abs(uv[1] - ref[1]).max() < 1e-6
+
+
 def test_generated_views_sample_lenses_and_their_keypoints_follow_opencv(tmp_path, sm):
     """``compose.cameras.distortion`` / ``aperture_radius`` draw a lens per view: every sample
     stores it, keypoints are projected through it (cv2.projectPoints agrees), the focus sits on
@@ -136,7 +153,7 @@ def test_generated_views_sample_lenses_and_their_keypoints_follow_opencv(tmp_pat
     for stem in stems:
         s = sm.read_sample(stem)
         cam = s.camera
-        assert -0.3 <= cam.dist[0] <= -0.1 and 0.01 <= cam.aperture_radius <= 0.02 and np.abs(cam.dist[2:4]).max() > 0
+        assert -0.3 <= cam.dist[0] < 0 and 0.01 <= cam.aperture_radius <= 0.02 and np.abs(cam.dist[2:4]).max() > 0
         for rec in s.subjects:
             ref = cv2.projectPoints(rec["keypoints3d_world"], cv2.Rodrigues(cam.R)[0], cam.t, cam.K, cam.dist)[0][:, 0]
             assert np.abs(ref - rec["keypoints2d"]).max() < 1e-3

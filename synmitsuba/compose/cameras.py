@@ -22,7 +22,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.errors import ConfigError
-from synmitsuba.scene.lens import LENS_MODELS
+from synmitsuba.scene.lens import LENS_MODELS, folded_radius, image_radius
 from synmitsuba.schema import Choice, ListOf, Number, Params, POSITIVE, Range, spec
 
 @dataclass
@@ -224,15 +224,22 @@ class Optics:
     aperture_radius: float = 0.0
 
 
-def sample_optics(cfg: CameraConfig, rng: np.random.Generator) -> Optics:
+def sample_optics(cfg: CameraConfig, rng: np.random.Generator, Ks: np.ndarray) -> Optics:
     """A view's optics drawn from the config's ranges; nothing is drawn for what is off, so a
-    config without lens effects composes exactly as before they existed."""
+    config without lens effects composes exactly as before they existed. A distortion that
+    would fold back inside the image at any of the view's intrinsics ``Ks`` (F, 3, 3) is scaled
+    down until it does not (a wide view takes less barrel)."""
     n = len(LENS_MODELS[cfg.lens].coefficients)
     dist = np.zeros(n)
     if any(cfg.distortion) or any(cfg.distortion_k2):
         dist[0], dist[1] = rng.uniform(*cfg.distortion), rng.uniform(*cfg.distortion_k2)
     if cfg.tangential and cfg.lens == "brown_conrady":
         dist[2:4] = rng.uniform(-cfg.tangential, cfg.tangential, 2)
+    reach = max(image_radius(K, cfg.width, cfg.height) for K in Ks)
+    for _ in range(40):
+        if not dist.any() or reach <= 0.9 * folded_radius(cfg.lens, dist):
+            break
+        dist *= 0.8
     aperture = float(rng.uniform(*cfg.aperture_radius)) if any(cfg.aperture_radius) else 0.0
     return Optics(cfg.lens, dist, aperture)
 

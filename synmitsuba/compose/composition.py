@@ -154,7 +154,7 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
     for k, c in enumerate(chosen):
         t = trajs[c]
         valid = (occ[c] <= cfg.occlusion_max) & (seen[c] >= cfg.in_view_min)
-        optics = cams.sample_optics(cfg, rng)
+        optics = cams.sample_optics(cfg, rng, t.K)
         views.append(ViewSpec(f"cam{k}", t.kind, [_camera_at(t, f, cfg, optics, group.centres[f])
                                                   for f in range(spec_.n_frames)], occ[c], seen[c], valid))
     for p in placed:

@@ -18,7 +18,7 @@ import numpy as np
 
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import camera_ray_matrix, frame
-from synmitsuba.scene.lens import LENS_MODELS, NUMPY_OPS
+from synmitsuba.scene.lens import LENS_MODELS, NUMPY_OPS, folded_radius, image_radius
 from synmitsuba.schema import POSITIVE as PIXELS
 
 
@@ -30,6 +30,9 @@ def _matrix(name: str, value, shape) -> np.ndarray:
     if not np.isfinite(arr).all():
         raise ConfigError(name, arr.tolist(), "all entries must be finite numbers")
     return arr
+
+
+FAR_OUTSIDE = 1e3  # normalised radius project() gives points beyond where the lens folds back
 
 
 @dataclass
@@ -57,6 +60,13 @@ class Camera:
             raise ConfigError("camera.lens", self.lens, f"use one of {', '.join(LENS_MODELS)}")
         n = len(LENS_MODELS[self.lens].coefficients)
         self.dist = np.zeros(n) if self.dist is None else _matrix("camera.dist", self.dist, (n,))
+        if self.distorted:
+            reach = folded_radius(self.lens, self.dist)
+            if image_radius(self.K, self.width, self.height) > 0.98 * reach:
+                raise ConfigError("camera.dist", np.asarray(self.dist).tolist(),
+                                  f"this distortion folds back inside the image (its radius stops growing at "
+                                  f"{reach:.3f} in normalised coordinates, the corners reach "
+                                  f"{image_radius(self.K, self.width, self.height):.3f}): use smaller coefficients")
         if not (np.isfinite(self.aperture_radius) and self.aperture_radius >= 0):
             raise ConfigError("camera.aperture_radius", self.aperture_radius, "give a radius >= 0 in metres")
         if not (np.isfinite(self.focus_distance) and self.focus_distance > 0):
@@ -118,7 +128,11 @@ class Camera:
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3) @ self.R.T + self.t
         if self.distorted:
             with np.errstate(divide="ignore", invalid="ignore"):
-                xd, yd = LENS_MODELS[self.lens].distort(p[:, 0] / p[:, 2], p[:, 1] / p[:, 2], self.dist, NUMPY_OPS)
+                x, y = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
+                xd, yd = LENS_MODELS[self.lens].distort(x, y, self.dist, NUMPY_OPS)
+                beyond = x * x + y * y > LENS_MODELS[self.lens].fold(self.dist)  # not imaged: far outside instead
+                out = FAR_OUTSIDE / np.maximum(np.hypot(x, y), 1e-12)
+                xd, yd = np.where(beyond, x * out, xd), np.where(beyond, y * out, yd)
             uvw = np.stack([xd, yd, np.ones_like(xd)], 1) @ self.K.T
             return uvw[:, :2], p[:, 2]
         uvw = p @ self.K.T

@@ -76,14 +76,53 @@ def _fisheye_direction(xd, yd, k, ops):
     return xd * s, yd * s, ops.cos(theta)
 
 
+def _first_root(coefficients) -> float:
+    """The smallest positive real root of the polynomial (lowest power first), else inf."""
+    roots = np.roots(np.asarray(coefficients, np.float64)[::-1]) if np.any(coefficients[1:]) else np.array([])
+    real = [r.real for r in roots if abs(r.imag) < 1e-12 and r.real > 0]
+    return min(real, default=np.inf)
+
+
+def _brown_fold(k) -> float:
+    """r^2 where the radial distortion stops growing: d(r (1 + k1 r^2 + k2 r^4 + k3 r^6)) / dr = 0."""
+    k1, k2, _, _, k3 = (float(c) for c in k)
+    return _first_root([1.0, 3 * k1, 5 * k2, 7 * k3])
+
+
+def _fisheye_fold(k) -> float:
+    """r^2 (of the pinhole coordinates) where theta_d stops growing, or the horizon."""
+    t2 = _first_root([1.0] + [(2 * i + 3) * float(c) for i, c in enumerate(k)])
+    return float(np.tan(min(np.sqrt(t2), np.pi / 2 - 1e-6)) ** 2)
+
+
 @dataclass(frozen=True)
 class LensModel:
     coefficients: tuple[str, ...]
     distort: Callable       # (x, y, k, ops) -> (xd, yd)
     direction: Callable     # (xd, yd, k, ops) -> camera-frame ray direction (dx, dy, dz), not unit
+    fold: Callable          # (k) -> r^2 = x^2 + y^2 beyond which the image folds back (inf: never)
 
 
 LENS_MODELS: dict[str, LensModel] = {
-    "brown_conrady": LensModel(("k1", "k2", "p1", "p2", "k3"), _brown, _brown_direction),
-    "fisheye": LensModel(("k1", "k2", "k3", "k4"), _fisheye, _fisheye_direction),
+    "brown_conrady": LensModel(("k1", "k2", "p1", "p2", "k3"), _brown, _brown_direction, _brown_fold),
+    "fisheye": LensModel(("k1", "k2", "k3", "k4"), _fisheye, _fisheye_direction, _fisheye_fold),
 }
+
+
+def image_radius(K: np.ndarray, width: int, height: int) -> float:
+    """The largest distorted radius (normalised coordinates) among the image's corners."""
+    corners = np.array([[0, 0, 1], [width, 0, 1], [0, height, 1], [width, height, 1]], np.float64)
+    n = corners @ np.linalg.inv(K).T
+    return float(np.hypot(n[:, 0], n[:, 1]).max())
+
+
+def folded_radius(lens: str, k) -> float:
+    """The largest distorted radius the lens reaches (where it folds; inf when it never does)."""
+    model = LENS_MODELS[lens]
+    r2 = model.fold(k)
+    if not np.isfinite(r2):
+        return np.inf
+    r = np.sqrt(r2)
+    xd, yd = model.distort(np.array([r]), np.array([0.0]), [*k[:2], 0.0, 0.0, *k[4:]] if lens == "brown_conrady" else k,
+                           NUMPY_OPS)
+    return float(np.hypot(xd, yd)[0])
