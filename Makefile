@@ -73,6 +73,8 @@ bench: setup
 	$(PY) bench/annotate_cost.py --views 4 --frames 3
 	$(PY) bench/generate_cost.py --sequences 6
 	$(PY) bench/diff_cost.py
+	$(PY) bench/motion_blur.py                                    # blur at 8 sub-frames / sharp, equal spp
+	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
 
 clean:
 	rm -rf out .pytest_cache

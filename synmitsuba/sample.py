@@ -43,6 +43,8 @@ def register_pass(name: str, channels, dtype: str, exr_type: str = "float32", do
 
 
 register_pass("rgb", ("R", "G", "B"), "float32", doc="linear radiance from the path tracer")
+register_pass("rgb_clean", ("clean.R", "clean.G", "clean.B"), "float32",
+              doc="with photo development only: the rendered linear radiance before it (rgb is the photo)")
 register_pass("rgb_noisy", ("noisy.R", "noisy.G", "noisy.B"), "float32",
               doc="the path tracer's RGB before denoising (only when rendered with denoise='oidn')")
 register_pass("alpha", ("A",), "float32", doc="fraction of the pixel covered by geometry (stratified sub-pixel rays)")
@@ -58,6 +60,9 @@ register_pass("layer", ("layer",), "uint8", "uint32", doc="semantic layer id (sy
 register_pass("flow_fwd", ("flow_fwd.X", "flow_fwd.Y"), "float32",
               doc="pixels each pixel's surface point moves to the next frame (exact; render_sequence)")
 register_pass("flow_bwd", ("flow_bwd.X", "flow_bwd.Y"), "float32", doc="the same to the previous frame")
+register_pass("motion_blur", ("blur.X", "blur.Y"), "float32",
+              doc="motion blur: image displacement over the exposure (end minus start), pixels, of the point "
+                  "the pixel-centre ray hits at its centre; 0 on background")
 register_pass("flow_fwd_flag", ("flow_fwd.flag",), "uint8", "uint32",
               doc="0 seen at the next frame, 1 hidden there, 2 outside its image, 3 background")
 register_pass("flow_bwd_flag", ("flow_bwd.flag",), "uint8", "uint32", doc="the same for the previous frame")

@@ -34,7 +34,7 @@ class Geometry:
     curves: dict = field(default_factory=dict)
 
 
-def _points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Geometry) -> np.ndarray:
+def points_at(scene: Scene, hits: dict, rays_o, rays_d, now: Geometry, then: Geometry) -> np.ndarray:
     """(N, 3) world positions at the other frame of the points hit now (nan where none)."""
     out = np.full((len(hits["t"]), 3), np.nan)
     order = np.argsort(hits["shape"], kind="stable")
@@ -84,7 +84,7 @@ def exact_flow(scene: Scene, cam: Camera, cam_other: Camera, now: Geometry, then
     H, W = cam.height, cam.width
     hits = pixel_hits(scene, cam) if hits is None else hits
     d = hits["rays"]
-    P = _points_at(scene, hits, cam.center, d, now, then)
+    P = points_at(scene, hits, cam.center, d, now, then)
     ok = np.isfinite(P[:, 0])
     uv, z = cam_other.project(np.where(ok[:, None], P, 0.0))
     px = np.stack(np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5), -1).reshape(-1, 2)

@@ -11,7 +11,8 @@ def scene_config(args, doc):
     from synmitsuba.generate.config import GenerateConfig, RenderOptions
     r = doc.render
     render = RenderOptions(spp=args.spp or r.spp, max_depth=r.max_depth, sampler=r.sampler,
-                           denoise=args.denoise or r.denoise)
+                           denoise=args.denoise or r.denoise, shutter_deg=[r.shutter_deg, r.shutter_deg],
+                           subframes=r.subframes, photo=r.photo)
     return GenerateConfig(sequences=1, seed=r.seed if args.seed is None else args.seed, frames=args.frames,
                           stride=args.stride, annotate=not args.no_labels,
                           flow="adjacent" if args.frames == 1 else "rendered", render=render, scene=args.scene)

@@ -17,6 +17,7 @@ import numpy as np
 from synmitsuba.compose.subjects import ClipSettings, PlacedSubject, SubjectEntry, subject_instances
 from synmitsuba.errors import ConfigError
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
+from synmitsuba.rendering.photo import PhotoOptions
 from synmitsuba.scene.lens import LENS_MODELS
 from synmitsuba.schema import (AnyOf, Check, Choice, Flag, ListOf, MapOf, Nested, Number, Params, POSITIVE, Text, Vector,
                                construct, mapping, optional, read_yaml, spec)
@@ -67,6 +68,10 @@ class RenderSettings(Params):
     height: int = spec(240, POSITIVE)
     sampler: str = spec("auto", Choice(SAMPLERS), doc="auto: the best that keeps spp exactly")
     denoise: str = spec("none", Choice(DENOISERS), doc="oidn: Intel Open Image Denoise (synmitsuba[denoise])")
+    shutter_deg: float = spec(0.0, Number(0, 360), doc="shutter angle (180: open half the frame interval); 0: no motion blur")
+    subframes: int = spec(8, POSITIVE, doc="motion blur: renders across the exposure, spp shared among them")
+    photo: PhotoOptions = spec(factory=PhotoOptions, check=Nested(PhotoOptions),
+                               doc="exposure, white balance, sensor noise, JPEG (off by default)")
 
 
 @dataclass

@@ -118,6 +118,11 @@ class PlacedSubject:
         f = self.frame if frame is None else int(frame) % self.motion.n_frames
         self.human.add_to(scene, *self.motion.frame(f), instance=self.instance, prefix=self.prefix)
 
+    def pose_at(self, scene, time: float) -> None:
+        """Pose the subject at fractional frame ``time`` (a motion-blur sub-frame; clamped to
+        the clip), moving it in place."""
+        self.human.add_to(scene, *self.motion.at(time), instance=self.instance, prefix=self.prefix)
+
 
 def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) -> Motion:
     """The clip turned by ``yaw_deg`` and moved so its mean ground position is ``position``

@@ -13,7 +13,8 @@ from synmitsuba.compose.composition import ComposeConfig
 from synmitsuba.engine.settings import DENOISERS, SAMPLERS
 from synmitsuba.errors import ConfigError
 from synmitsuba.resources import config_names, find_config
-from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, Text, optional, read_yaml, spec
+from synmitsuba.rendering.photo import PhotoOptions
+from synmitsuba.schema import POSITIVE, Choice, Flag, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
 
 @dataclass
@@ -22,6 +23,11 @@ class RenderOptions(Params):
     max_depth: int = spec(6, POSITIVE)
     sampler: str = spec("auto", Choice(SAMPLERS))
     denoise: str = spec("none", Choice(DENOISERS), doc="oidn needs synmitsuba[denoise]")
+    shutter_deg: list = spec(factory=lambda: [0.0, 0.0], check=Range(0, 360),
+                             doc="shutter angle range drawn per sequence (180 = open half the frame interval); 0: no motion blur")
+    subframes: int = spec(8, POSITIVE, doc="motion blur: renders across the exposure, spp shared among them")
+    photo: PhotoOptions = spec(factory=PhotoOptions, check=Nested(PhotoOptions),
+                               doc="exposure, white balance, sensor noise, JPEG (off by default)")
 
 
 @dataclass

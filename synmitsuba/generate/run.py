@@ -21,7 +21,7 @@ from synmitsuba.errors import ConfigError
 from synmitsuba.generate.config import GenerateConfig
 from synmitsuba.generate.executors import EXECUTORS, Failure
 from synmitsuba.io.files import ACTIVE_TEMPORARIES, atomic_path
-from synmitsuba.seeds import render_seed, sequence_rng
+from synmitsuba.seeds import effects_rng, render_seed, sequence_rng
 
 
 def sequence_spec(cfg: GenerateConfig, index: int):
@@ -33,6 +33,26 @@ def sequence_spec(cfg: GenerateConfig, index: int):
         return scene_spec(cfg.scene, cfg.scene, rng, seed=cfg.seed)
     from synmitsuba.compose.composition import compose_scene
     return compose_scene(cfg.compose, rng, seed=cfg.seed)
+
+
+def sequence_shutter(cfg: GenerateConfig, index: int) -> float:
+    """Sequence ``index``'s exposure as a share of the frame interval, drawn from
+    ``render.shutter_deg`` (nothing drawn when it is off)."""
+    lo, hi = cfg.render.shutter_deg
+    if hi <= 0:
+        return 0.0
+    return float(effects_rng(cfg.seed, index).uniform(lo, hi)) / 360.0
+
+
+def sequence_photo(cfg: GenerateConfig, index: int):
+    """Sequence ``index``'s photo development (``render.photo``), or None when it is off.
+    Drawn after the shutter from the same effects generator."""
+    if not cfg.render.photo.enabled:
+        return None
+    rng = effects_rng(cfg.seed, index)
+    if cfg.render.shutter_deg[1] > 0:
+        rng.uniform()  # the shutter's draw (sequence_shutter)
+    return cfg.render.photo.draw(rng)
 
 
 def sequence_frames(cfg: GenerateConfig, n_frames: int) -> list[int]:
@@ -54,7 +74,9 @@ def write_sequence(spec, cfg: GenerateConfig, index: int, folder: str, bar=None)
         for f, view, sample in render_sequence(spec, frames=sequence_frames(cfg, spec.n_frames), spp=r.spp,
                                                seed=render_seed(cfg.seed, index), annotate=cfg.annotate,
                                                body_models=cfg.smplx, flow="rendered" if cfg.flow == "rendered" else 1,
-                                               max_depth=r.max_depth, sampler=r.sampler, denoise=r.denoise):
+                                               max_depth=r.max_depth, sampler=r.sampler, denoise=r.denoise,
+                                               shutter=sequence_shutter(cfg, index), subframes=r.subframes,
+                                               photo=sequence_photo(cfg, index)):
             sample.meta.update(sequence=index)
             stem = f"f{f:04d}_{view}"
             write_sample(sample, os.path.join(folder, stem))

@@ -13,7 +13,7 @@ for mmhuman3d reads our data unchanged.
   and scale); ``misc``: what holds for the whole file (flat hand mean, box source, ...).
 - Our own extras ride along as non-standard keys, which ``HumanData`` accepts (the file is
   written with ``__key_strict__ = False``): ``anny`` (anny's pose), ``smplx_world`` /
-  ``smpl_world`` (the fits in the world frame) and ``cam_param`` (K, R, T per row).
+  ``smpl_world`` (the fits in the world frame) and ``cam_param`` (K, R, T, lens, dist per row).
 """
 from __future__ import annotations
 
@@ -163,7 +163,10 @@ def export_humandata(dataset_dir: str, out_npz: str, data_root: str | None = Non
                  "anny": _anny(rows),
                  "cam_param": {"K": np.array([s.camera.K for s, _ in rows], np.float32),
                                "R": np.array([s.camera.R for s, _ in rows], np.float32),
-                               "T": np.array([s.camera.t for s, _ in rows], np.float32)}}
+                               "T": np.array([s.camera.t for s, _ in rows], np.float32),
+                               "lens": [s.camera.lens for s, _ in rows],
+                               "dist": np.array([np.pad(s.camera.dist, (0, 5 - len(s.camera.dist))) for s, _ in rows],
+                                                np.float32)}}
     fitted = []
     for kind in ("smplx", "smpl"):
         cam, world = _body_model(rows, kind, "cam"), _body_model(rows, kind, "world")

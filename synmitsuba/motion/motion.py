@@ -94,3 +94,16 @@ class Motion:
     def frame(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """(rotations (J, 3, 3), root_translation (3,)) of frame i."""
         return self.rotations[i], self.root_translation[i]
+
+    def at(self, time: float) -> tuple[np.ndarray, np.ndarray]:
+        """The pose at fractional frame ``time`` (clamped to the clip): slerp between the two
+        frames around it, the root linearly; a whole ``time`` is that frame exactly."""
+        t = float(np.clip(time, 0, self.n_frames - 1))
+        i = min(int(np.floor(t)), self.n_frames - 1)
+        if t == i:
+            return self.frame(i)
+        a = t - i
+        from scipy.spatial.transform import Rotation
+        r0, r1 = Rotation.from_matrix(self.rotations[i]), Rotation.from_matrix(self.rotations[i + 1])
+        rot = (r0 * Rotation.from_rotvec((r0.inv() * r1).as_rotvec() * a)).as_matrix()  # slerp, every joint at once
+        return rot, (1 - a) * self.root_translation[i] + a * self.root_translation[i + 1]

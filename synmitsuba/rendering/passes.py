@@ -40,14 +40,29 @@ def _integrator(max_depth: int):
     return _integrators[key]
 
 
+def render_rgb(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6, rfilter: str = "box",
+               sampler: str = "auto") -> np.ndarray:
+    """The path-traced RGB alone (H, W, 3 float32 linear): what ``render`` traces, for callers
+    that combine several (motion blur's sub-frames)."""
+    import mitsuba as mi
+    sensor_mod.register(require_variant())
+    built = build(scene)
+    sensor = mi.load_dict(sensor_mod.sensor_dict(camera, spp, rfilter, choose_sampler(sampler, spp)))
+    return np.array(mi.render(built.mi_scene, sensor=sensor, integrator=_integrator(max_depth), spp=spp, seed=seed),
+                    dtype=np.float32)[..., :3]
+
+
 def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6,
-           coverage_samples: int = 9, rfilter: str = "box", sampler: str = "auto", denoise: str = "none") -> Sample:
+           coverage_samples: int = 9, rfilter: str = "box", sampler: str = "auto", denoise: str = "none",
+           rgb: np.ndarray | None = None) -> Sample:
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
     bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``.
     ``sampler``: ``auto`` (the best that keeps spp exactly, see ``render.denoise``) or a Mitsuba
     sampler; ``denoise="oidn"`` denoises ``rgb`` and keeps the raw one as ``rgb_noisy``.
     ``coverage_samples`` (alpha, per-instance coverage): 9 by measurement on the demo's edge
-    pixels against 256 rays, RMS error 0.43 / 0.14 / 0.069 / 0.059 for 1 / 4 / 9 / 16 rays."""
+    pixels against 256 rays, RMS error 0.43 / 0.14 / 0.069 / 0.059 for 1 / 4 / 9 / 16 rays.
+    ``rgb``: an RGB traced already (``render_rgb``; motion blur's sub-frame average) to use
+    instead of tracing one; the exact passes are this scene's and camera's."""
     import mitsuba as mi
     spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
                                         (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
@@ -66,8 +81,11 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     t1 = time.perf_counter()
     chosen = choose_sampler(sampler, spp)
     sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, chosen)
-    rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth),
-                             spp=spp, seed=seed), dtype=np.float32)[..., :3]
+    if rgb is None:
+        rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth),
+                                 spp=spp, seed=seed), dtype=np.float32)[..., :3]
+    elif np.shape(rgb) != (camera.height, camera.width, 3):
+        raise ConfigError("rgb", f"array{np.shape(rgb)}", f"give ({camera.height}, {camera.width}, 3): the camera's image")
     extra = {}
     t_rgb = time.perf_counter()
     if denoise == "oidn":

@@ -157,6 +157,17 @@ class Camera:
         S = np.diag([width / self.width, height / self.height, 1.0])
         return dataclasses.replace(self, K=S @ self.K, width=width, height=height)
 
+    def blended(self, other: "Camera", a: float) -> "Camera":
+        """The camera a share ``a`` of the way to ``other`` (a motion-blur sub-frame): centre
+        and K linearly, rotation by slerp; lens and image size are this camera's."""
+        if a == 0 or (np.array_equal(self.R, other.R) and np.array_equal(self.t, other.t)
+                      and np.array_equal(self.K, other.K)):
+            return self
+        from synmitsuba.geometry import slerp_matrices
+        R = slerp_matrices(np.stack([self.R, other.R]), np.array([a]))[0]
+        centre = (1 - a) * self.center + a * other.center
+        return dataclasses.replace(self, K=(1 - a) * self.K + a * other.K, R=R, t=-R @ centre)
+
     # -- serialization -----------------------------------------------------------------
     def to_dict(self) -> dict:
         return {"K": self.K.tolist(), "R": self.R.tolist(), "t": self.t.tolist(),
