@@ -16,6 +16,7 @@ from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.engine.build import settle_frame_memory
 from synmitsuba.errors import ConfigError
+from synmitsuba.rendering.denoise import GUIDE_SPP
 from synmitsuba.rendering.passes import render, render_rgb
 from synmitsuba.schema import POSITIVE, Number
 from synmitsuba.rendering.photo import Photo, develop
@@ -60,15 +61,17 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
     for k, f in enumerate(frames):
         for p in placed:
             p.pose_in(scene, int(f))
-        blurred, motions = (blurred_rgbs(scene, placed, [spec.view(n) for n in names], int(f), shutter, subframes, spp,
-                                         seed, render_args, motion=annotate) if shutter > 0 else ({}, {}))
+        blurred = (blurred_rgbs(scene, placed, [spec.view(n) for n in names], int(f), shutter, subframes, spp, seed,
+                                render_args, motion=annotate) if shutter > 0 else {})
         for name in names:
             view = spec.view(name)
-            sample = render(scene, view.cameras[f], spp=spp, seed=seed + int(f), rgb=blurred.get(name), **render_args)
+            exposure = blurred.get(name, Exposure(None))
+            sample = render(scene, view.cameras[f], spp=spp, seed=seed + int(f), rgb=exposure.rgb,
+                            denoise_guides=exposure.guides, **render_args)
             if shutter > 0:
                 sample.meta.update(shutter=shutter, subframes=min(subframes, spp))
-            if name in motions:
-                sample.passes["motion_blur"] = motions[name]
+            if exposure.motion is not None:
+                sample.passes["motion_blur"] = exposure.motion
             if photo is not None:
                 sample.passes["rgb_clean"] = sample.passes["rgb"]
                 sample.passes["rgb"] = develop(sample.passes["rgb"], photo, photo_rng(seed + int(f), names.index(name)))
@@ -180,15 +183,42 @@ def exposure_motion(scene, keys: _Keys, cameras: list, frame: int, times: list) 
     return motion.reshape(cam.height, cam.width, 2).astype(np.float32)
 
 
+@dataclass
+class Exposure:
+    """A view's motion-blurred frame: the RGB, the denoising guides averaged like it (with
+    ``denoise="oidn"``), and the blur vectors (``exposure_motion``, when asked for)."""
+
+    rgb: np.ndarray | None
+    guides: tuple | None = None
+    motion: np.ndarray | None = None
+
+
+class _Accumulator:
+    """Sample-weighted sums of a view's sub-frame images."""
+
+    def __init__(self):
+        self.rgb, self.albedo, self.normal = 0.0, 0.0, 0.0
+
+    def add(self, weight: float, rgb: np.ndarray, aux: tuple | None, aux_weight: float) -> None:
+        self.rgb = self.rgb + weight * rgb.astype(np.float64)
+        if aux is not None:
+            self.albedo, self.normal = self.albedo + aux_weight * aux[0], self.normal + aux_weight * aux[1]
+
+    def exposure(self, with_guides: bool) -> Exposure:
+        guides = (np.asarray(self.albedo, np.float32), np.asarray(self.normal, np.float32)) if with_guides else None
+        return Exposure(np.asarray(self.rgb, np.float32), guides)
+
+
 def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, subframes: int, spp: int, seed: int,
-                 render_args: dict, motion: bool = False) -> tuple[dict, dict]:
-    """Each view's motion-blurred RGB at ``frame`` (subjects posed there): ``min(subframes,
+                 render_args: dict, motion: bool = False) -> dict[str, Exposure]:
+    """Each view's motion-blurred ``Exposure`` at ``frame`` (subjects posed there): ``min(subframes,
     spp)`` renders across the exposure, each with its share of ``spp`` (the total stays
-    ``spp``), averaged by samples. Subjects are posed at the exposure's first and last
-    sub-frame and its centre, and move linearly between those keys (``_Keys``); moving cameras
-    are blended per sub-frame. The scene is left posed at ``frame`` with its previous positions
-    (flow's) as they were. Returns the RGBs by view name and, with ``motion``, each view's
-    ``exposure_motion``."""
+    ``spp``), averaged by samples; with ``render_args["denoise"] == "oidn"`` the guides are
+    traced per sub-frame too (``GUIDE_SPP`` shared likewise) so they blur as the colour does.
+    Subjects are posed at the exposure's first and last sub-frame and its centre, and move
+    linearly between those keys (``_Keys``); moving cameras are blended per sub-frame. The scene
+    is left posed at ``frame`` with its previous positions (flow's) as they were. With
+    ``motion``, each view's ``exposure_motion``."""
     n = min(subframes, spp)
     shares = [spp // n + (k < spp % n) for k in range(n)]
     times = subframe_times(frame, shutter, n)
@@ -196,20 +226,24 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
             {k: c.previous_points for k, c in scene.curves.items()})
     keys = _exposure_keys(scene, placed, frame, times) if n > 1 else None
     args = {k: v for k, v in render_args.items() if k in ("max_depth", "rfilter", "sampler")}
-    out = {v.name: np.zeros((v.cameras[frame].height, v.cameras[frame].width, 3), np.float64) for v in views}
+    denoised = render_args.get("denoise", "none") == "oidn"
+    guide_spp = max(1, GUIDE_SPP // n) if denoised else 0
+    sums = {v.name: _Accumulator() for v in views}
     for k, (t, share) in enumerate(zip(times, shares)):
         if keys is not None:
             keys.move(scene, t)
         for v in views:
-            sub_seed = subframe_seed(seed + frame, k)
-            out[v.name] += share / spp * render_rgb(scene, _camera_at(v.cameras, t), share, sub_seed, **args)
-    motions = {}
+            rgb, aux = render_rgb(scene, _camera_at(v.cameras, t), share, subframe_seed(seed + frame, k), guide_spp=guide_spp,
+                                  **args)
+            sums[v.name].add(share / spp, rgb, aux, 1 / n)  # guides: the same spp every sub-frame
+    out = {name: acc.exposure(denoised) for name, acc in sums.items()}
     if keys is not None:
         keys.restore(scene, 1)  # the frame's own positions, bit for bit
         if motion:
-            motions = {v.name: exposure_motion(scene, keys, v.cameras, frame, times) for v in views}
+            for v in views:
+                out[v.name].motion = exposure_motion(scene, keys, v.cameras, frame, times)
     for k, prev in kept[0].items():
         scene.meshes[k].previous_vertices = prev
     for k, prev in kept[1].items():
         scene.curves[k].previous_points = prev
-    return {name: rgb.astype(np.float32) for name, rgb in out.items()}, motions
+    return out

@@ -28,11 +28,12 @@ def _aov_integrator(variant: str):
     return mi.load_dict({"type": "aov", "aovs": "albedo:albedo,nn:sh_normal"})
 
 
-def guides(mi_scene, sensor_dict: dict, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(albedo, normal) (H, W, 3) float32 of the primary hits, averaged over each pixel."""
+def guides(mi_scene, sensor_dict: dict, seed: int, spp: int = GUIDE_SPP) -> tuple[np.ndarray, np.ndarray]:
+    """(albedo, normal) (H, W, 3) float32 of the primary hits, averaged over each pixel (through
+    the same sensor as the colour: its lens distortion and depth of field blur them alike)."""
     import mitsuba as mi
-    sensor = mi.load_dict({**sensor_dict, "sampler": {"type": "independent", "sample_count": GUIDE_SPP}})
-    img = np.array(mi.render(mi_scene, sensor=sensor, integrator=_aov_integrator(mi.variant()), spp=GUIDE_SPP, seed=seed))
+    sensor = mi.load_dict({**sensor_dict, "sampler": {"type": "independent", "sample_count": spp}})
+    img = np.array(mi.render(mi_scene, sensor=sensor, integrator=_aov_integrator(mi.variant()), spp=spp, seed=seed))
     return np.ascontiguousarray(img[..., 0:3], np.float32), np.ascontiguousarray(img[..., 3:6], np.float32)
 
 

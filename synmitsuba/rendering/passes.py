@@ -41,20 +41,22 @@ def _integrator(max_depth: int):
 
 
 def render_rgb(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6, rfilter: str = "box",
-               sampler: str = "auto") -> np.ndarray:
-    """The path-traced RGB alone (H, W, 3 float32 linear): what ``render`` traces, for callers
-    that combine several (motion blur's sub-frames)."""
+               sampler: str = "auto", guide_spp: int = 0) -> tuple[np.ndarray, tuple | None]:
+    """The path-traced RGB alone (H, W, 3 float32 linear), what ``render`` traces, for callers
+    that combine several (motion blur's sub-frames); with ``guide_spp``, also the denoising
+    guides (albedo, normal) at that many samples per pixel, else None."""
     import mitsuba as mi
     sensor_mod.register(require_variant())
     built = build(scene)
-    sensor = mi.load_dict(sensor_mod.sensor_dict(camera, spp, rfilter, choose_sampler(sampler, spp)))
-    return np.array(mi.render(built.mi_scene, sensor=sensor, integrator=_integrator(max_depth), spp=spp, seed=seed),
-                    dtype=np.float32)[..., :3]
+    sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, choose_sampler(sampler, spp))
+    rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth), spp=spp,
+                             seed=seed), dtype=np.float32)[..., :3]
+    return rgb, (guides(built.mi_scene, sensor_dict, seed, guide_spp) if guide_spp else None)
 
 
 def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6,
            coverage_samples: int = 9, rfilter: str = "box", sampler: str = "auto", denoise: str = "none",
-           rgb: np.ndarray | None = None) -> Sample:
+           rgb: np.ndarray | None = None, denoise_guides: tuple | None = None) -> Sample:
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
     bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``.
     ``sampler``: ``auto`` (the best that keeps spp exactly, see ``render.denoise``) or a Mitsuba
@@ -62,7 +64,9 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     ``coverage_samples`` (alpha, per-instance coverage): 9 by measurement on the demo's edge
     pixels against 256 rays, RMS error 0.43 / 0.14 / 0.069 / 0.059 for 1 / 4 / 9 / 16 rays.
     ``rgb``: an RGB traced already (``render_rgb``; motion blur's sub-frame average) to use
-    instead of tracing one; the exact passes are this scene's and camera's."""
+    instead of tracing one; the exact passes are this scene's and camera's. ``denoise_guides``:
+    the (albedo, normal) that image was traced with (motion blur's: averaged over its sub-frames,
+    so the denoiser does not sharpen what moved), instead of this scene's."""
     import mitsuba as mi
     spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
                                         (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
@@ -89,7 +93,8 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     extra = {}
     t_rgb = time.perf_counter()
     if denoise == "oidn":
-        extra["rgb_noisy"], rgb = rgb, oidn(rgb, *guides(built.mi_scene, sensor_dict, seed))
+        aux = guides(built.mi_scene, sensor_dict, seed) if denoise_guides is None else denoise_guides
+        extra["rgb_noisy"], rgb = rgb, oidn(rgb, *aux)
     t2 = time.perf_counter()
     passes = exact_passes(built, camera)
     passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed, exact=passes)
