@@ -17,7 +17,7 @@ from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
 from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, clip_bounds
-from synmitsuba.errors import ConfigError
+from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
 
@@ -107,8 +107,9 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
     drafts = [_draft(sc, sources, cfg.base, i, rng) for i in range(count)]
     boxes = object_boxes(env)
-    placements = place_subjects([d.hulls for d in drafts], env.area, boxes[:, [0, 2, 3, 5]], cfg.placement, rng)
+    placements = _place(drafts, env, boxes[:, [0, 2, 3, 5]], cfg, sources, rng)
     first = first_subject_instance(OBJECT_INSTANCE + len(env.objects) - 1)
+    drafts = [drafts[p.index] for p in placements]  # those placed (all, unless placement warned)
     subjects = [SubjectSpec(d.recipe, d.motion, p.position, p.yaw_deg, first + i, p.footprint, p.frames, d.height, d.lift)
                 for i, (d, p) in enumerate(zip(drafts, placements))]
     n_frames = len(placements[0].frames)
@@ -129,6 +130,32 @@ class _Draft:
     hulls: list
     height: float
     lift: float
+
+
+MOTION_REDRAWS = 3  # rounds of new motions for subjects that placement left out
+
+
+def _place(drafts: list, env, boxes: np.ndarray, cfg: ComposeConfig, sources: list, rng) -> list:
+    """``place_subjects``, and while it leaves subjects out, those subjects' motions drawn anew
+    (another source and seed: a clip that may cover less ground) and everyone placed again, up
+    to ``MOTION_REDRAWS`` rounds; only the last round's shortfall is warned about."""
+    import warnings
+    for _ in range(MOTION_REDRAWS):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SynMitsubaWarning)
+            placements = place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng)
+        placed = {p.index for p in placements}
+        if len(placed) == len(drafts):
+            return placements
+        for i in sorted(set(range(len(drafts))) - placed):
+            drafts[i] = _redraw_motion(drafts[i], cfg.subjects, sources, cfg.base, i, rng)
+    return place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng)
+
+
+def _redraw_motion(d: _Draft, sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:
+    source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
+    motion = MotionSpec(source, mseed, sc.seconds, sc.fps, base)
+    return _Draft(d.recipe, motion, d.human, *clip_bounds(d.human, motion, f"subjects[{i}].motion"))
 
 
 def _draft(sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:

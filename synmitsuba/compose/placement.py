@@ -8,7 +8,7 @@ Boxes on the ground are ``(x_min, z_min, x_max, z_max)`` metres.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,6 +22,8 @@ class PlacementConfig(Params):
     yaw_steps: int = spec(8, POSITIVE, doc="candidate headings per position (evenly spaced, random offset)")
     group_radius: float = spec(3.0, Number(0.1, 100), doc="max metres from a subject's box centre to the group's")
     margin: float = spec(0.05, Number(0, 5), doc="clearance kept around every box, metres")
+    widen: float = spec(2.0, Number(1, 10), doc="when subjects do not fit, later tries widen group_radius up to "
+                        "this factor before leaving any out")
 
 
 def frame_hulls(xz_per_frame) -> list[np.ndarray]:
@@ -82,41 +84,79 @@ def _valid(cands: np.ndarray, box: np.ndarray, area, obstacles: np.ndarray, cent
     return ok
 
 
+PLACEMENT_TRIES = 24  # whole placements tried before subjects are left out (fresh headings and picks)
+
+
 @dataclass
 class Placement:
     position: tuple      # (x, z) metres: where the clip's mean root position goes
     yaw_deg: float
     footprint: np.ndarray  # (4,) whole-clip box
     frames: np.ndarray     # (F, 4) per-frame boxes
+    index: int = 0         # which of the subjects asked for
+
+
+def _options(hulls, cands: np.ndarray, area, obstacles: np.ndarray, placed: list, cfg: PlacementConfig,
+             rng: np.random.Generator) -> list:
+    """Every (yaw, position) that fits one subject now (headings evenly spaced, random offset)."""
+    yaws = (rng.uniform(0, 360 / cfg.yaw_steps) + np.arange(cfg.yaw_steps) * 360 / cfg.yaw_steps) % 360 - 180
+    options = []
+    for yaw in yaws:
+        box = envelope(frame_boxes(hulls, yaw))
+        ok = _valid(cands, box, area, obstacles, [((p.footprint[:2] + p.footprint[2:]) / 2) for p in placed], cfg)
+        options += [(float(yaw), c) for c in cands[ok]]
+    return options
+
+
+def _attempt(hulls_per_subject: list, order: list, area, obstacles: np.ndarray, cands: np.ndarray,
+             cfg: PlacementConfig, rng: np.random.Generator) -> tuple[list, list]:
+    """One placement pass over the subjects in ``order``: each placed at a random fitting
+    (yaw, position), one that fits nowhere skipped (later ones are still tried). Returns the
+    placements and the indices left out."""
+    placed: list[Placement] = []
+    left = []
+    for i in order:
+        hulls = hulls_per_subject[i]
+        options = _options(hulls, cands, area, obstacles, placed, cfg, rng)
+        if not options:
+            left.append(i)
+            continue
+        yaw, pos = options[int(rng.integers(len(options)))]
+        frames = frame_boxes(hulls, yaw, pos)
+        placed.append(Placement((float(pos[0]), float(pos[1])), yaw, envelope(frames), frames, i))
+        obstacles = np.concatenate([obstacles, envelope(frames)[None]], 0)
+    return placed, left
 
 
 def place_subjects(hulls_per_subject: list, area, object_boxes: np.ndarray, cfg: PlacementConfig,
-                   rng: np.random.Generator) -> list[Placement]:
-    """Place subjects one at a time (their per-frame hulls centred on the clip's mean root
-    position). Returns one placement per subject placed: fewer than asked with a warning when
-    the rest do not fit; a ConfigError when not even the first does."""
+                   rng: np.random.Generator, tries: int = PLACEMENT_TRIES) -> list[Placement]:
+    """Place subjects (their per-frame hulls centred on the clip's mean root position), one
+    at a time, every one tried. When some do not fit, the whole placement is tried again (up
+    to ``tries`` times) with fresh headings and picks, the largest whole-clip boxes first and
+    the group radius widened step by step up to ``cfg.widen`` times; the best pass is kept.
+    Returns the placements in subject order (``Placement.index``): all of them, or fewer with a
+    warning naming who was left out; a ConfigError when none fits."""
     obstacles = np.asarray(object_boxes, np.float64).reshape(-1, 4)
     cands = _candidates(area, cfg.grid_step)
-    placed: list[Placement] = []
-    for i, hulls in enumerate(hulls_per_subject):
-        yaws = (rng.uniform(0, 360 / cfg.yaw_steps) + np.arange(cfg.yaw_steps) * 360 / cfg.yaw_steps) % 360 - 180
-        options = []
-        for yaw in yaws:
-            box = envelope(frame_boxes(hulls, yaw))
-            ok = _valid(cands, box, area, obstacles, [((p.footprint[:2] + p.footprint[2:]) / 2) for p in placed], cfg)
-            options += [(float(yaw), c) for c in cands[ok]]
-        if not options:
-            why = (f"subject {i} does not fit: no position in area {list(area)} with step {cfg.grid_step} m keeps "
-                   f"its whole-clip box clear of {len(obstacles)} boxes by {cfg.margin} m"
-                   + (f" within {cfg.group_radius} m of the group" if placed else ""))
-            if not placed:
-                raise ConfigError("subjects", len(hulls_per_subject), why + "; choose shorter or slower motions, "
-                                  "a larger environment area or fewer objects")
-            warnings.warn(f"{why}; placing {len(placed)} of {len(hulls_per_subject)} subjects (raise "
-                          "placement.group_radius or pick fewer subjects)", SynMitsubaWarning, stacklevel=2)
+    n = len(hulls_per_subject)
+    sizes = [np.prod(np.diff(envelope(frame_boxes(h)).reshape(2, 2), axis=0)) for h in hulls_per_subject]
+    order = list(range(n))  # the first pass as given: a scene where all fit composes as it always has
+    best: list[Placement] = []
+    left = order
+    for k in range(tries):
+        widened = replace(cfg, group_radius=cfg.group_radius * (1 + (cfg.widen - 1) * k / max(tries - 1, 1)))
+        placed, missing = _attempt(hulls_per_subject, order, area, obstacles, cands, widened, rng)
+        if len(placed) > len(best):
+            best, left = placed, missing
+        if not left:
             break
-        yaw, pos = options[int(rng.integers(len(options)))]
-        frames = frame_boxes(hulls, yaw, pos)
-        placed.append(Placement((float(pos[0]), float(pos[1])), yaw, envelope(frames), frames))
-        obstacles = np.concatenate([obstacles, envelope(frames)[None]], 0)
-    return placed
+        order = sorted(range(n), key=lambda i: -sizes[i])
+    why = (f"no position in area {list(area)} with step {cfg.grid_step} m keeps the whole-clip box clear of "
+           f"{len(obstacles)} boxes and the other subjects by {cfg.margin} m within {cfg.group_radius} m of the group")
+    if not best:
+        raise ConfigError("subjects", n, f"no subject fits ({why}); choose shorter or slower motions, a larger "
+                          "environment area or fewer objects")
+    if left:
+        warnings.warn(f"subjects {sorted(left)} do not fit after {tries} tries ({why}); placing {len(best)} of {n} "
+                      "subjects (raise placement.group_radius or pick fewer subjects)", SynMitsubaWarning, stacklevel=2)
+    return sorted(best, key=lambda p: p.index)
