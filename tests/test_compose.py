@@ -407,3 +407,21 @@ def test_instance_ids_stay_unique_with_more_than_100_objects(sm, tmp_path):
         rec = sample.subjects[0]
         assert rec["instance"] == 200 and (sample.instance == 200).sum() > 0
         assert ((sample.instance == 200) <= rec["amodal_mask"]).all() and rec["visible_fraction"] <= 1
+
+
+def test_a_group_no_camera_frames_is_placed_tighter_before_composition_fails(sm, monkeypatch):
+    """When no candidate camera frames the group (hps.yaml seed 10 raised "no camera passes the
+    bounds"), the subjects are placed again with a narrower group radius and the cameras
+    chosen anew; a config no camera can ever frame still fails, naming cameras.distance_max."""
+    from synmitsuba.compose import composition
+    real, calls = cams.candidates, []
+
+    def first_fails(*args, **kwargs):
+        calls.append(1)
+        return [] if len(calls) == 1 else real(*args, **kwargs)
+    monkeypatch.setattr(cams, "candidates", first_fails)
+    spec = composition.compose_scene(SMALL, np.random.default_rng(2))
+    assert len(calls) == 2 and len(spec.views) == 3 and len(spec.subjects) == 2
+    monkeypatch.setattr(cams, "candidates", lambda *a, **k: [])
+    with pytest.raises(cams.NoViewFits, match="cameras.distance_max"):
+        composition.compose_scene(SMALL, np.random.default_rng(2))

@@ -297,9 +297,13 @@ def choose_views(scores: np.ndarray, azimuths: np.ndarray, count: int, tolerance
     return chosen
 
 
+class NoViewFits(ConfigError):
+    """No candidate camera frames the group within the bounds (composition then tightens the group)."""
+
+
 def check_count(found: int, cfg: CameraConfig, group: Group) -> None:
     if found == 0:
         alpha = np.radians(cfg.hfov_deg[1]) * min(1.0, cfg.height / cfg.width)
-        raise ConfigError("cameras.distance_max", cfg.distance_max,
+        raise NoViewFits("cameras.distance_max", cfg.distance_max,
                           f"no camera passes the bounds (L_min is at least {l_min(group, alpha, cfg.fit_lambda):.2f} m "
                           f"for this group); raise distance_max, widen pitch_deg or hfov_deg, or lower fit_lambda")
