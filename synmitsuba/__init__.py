@@ -29,6 +29,7 @@ _FROM = {
                            "compose_scene", "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
     "synmitsuba.seeds": ("sequence_rng", "render_seed"),
     "synmitsuba.pipeline": ("render_sequence",),
+    "synmitsuba.rendering.photo": ("Photo", "PhotoOptions"),
     "synmitsuba.annotate": ("Annotator", "fit_smplx", "SMPLXFit", "SMPLXOptions", "write_anny_model"),
     "synmitsuba.data": ("SynDataset",),
     "synmitsuba.generate": ("GenerateConfig", "load_generate_config", "add_body_model_fits", "sequence_spec",

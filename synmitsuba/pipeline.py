@@ -6,21 +6,19 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
-from synmitsuba.annotate.flow import Geometry, SequenceFlow, flow_targets, pixel_hits, points_at
+from synmitsuba.annotate.flow import SequenceFlow, flow_targets
 from synmitsuba.annotate.records import Annotator
 from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.engine.build import settle_frame_memory
 from synmitsuba.errors import ConfigError
-from synmitsuba.rendering.denoise import GUIDE_SPP
-from synmitsuba.rendering.passes import render, render_rgb
+from synmitsuba.motion_blur import Exposure, blurred_rgbs
+from synmitsuba.rendering.passes import render
 from synmitsuba.schema import POSITIVE, Number
 from synmitsuba.rendering.photo import Photo, develop
-from synmitsuba.seeds import photo_rng, subframe_seed
+from synmitsuba.seeds import photo_rng
 
 
 def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, annotate: bool = True,
@@ -38,7 +36,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
     and next frame of ``frames`` (the samples flow pairs with), an int k to clip frames f - k
     and f + k; the targets are in the meta's ``flow_frames``. ``shutter`` > 0 (the exposure, a
     share of the frame interval: 0.5 is a 180 degree shutter) blurs the RGB with motion:
-    ``subframes`` renders across the exposure (``blurred_rgbs``); every label stays the one at
+    ``subframes`` renders across the exposure (``motion_blur.blurred_rgbs``); every label stays the one at
     the exposure centre, frame f. ``photo`` develops the RGB into a photo (``rendering.photo``:
     exposure, white balance, sensor noise, JPEG; noise seeded per frame and view), keeping the
     rendered radiance as ``rgb_clean``."""
@@ -70,12 +68,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
                             denoise_guides=exposure.guides, **render_args)
             if shutter > 0:
                 sample.meta.update(shutter=shutter, subframes=min(subframes, spp))
-            if exposure.motion is not None:
-                sample.passes["motion_blur"] = exposure.motion
-            if photo is not None:
-                sample.passes["rgb_clean"] = sample.passes["rgb"]
-                sample.passes["rgb"] = develop(sample.passes["rgb"], photo, photo_rng(seed + int(f), names.index(name)))
-                sample.meta["photo"] = photo.to_dict()
+            _camera_effects(sample, exposure, photo, photo_rng(seed + int(f), names.index(name)))
             sample.meta.update(frame=int(f), view=name, camera_motion=view.kind,
                                subjects=[{"instance": s.instance, "occlusion": float(o), "in_view": float(i),
                                           "valid": bool(v)} for s, o, i, v in
@@ -87,163 +80,12 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
         settle_frame_memory()
 
 
-def subframe_times(frame: int, shutter: float, subframes: int) -> list[float]:
-    """Centres of ``subframes`` equal slices of the exposure [f - shutter / 2, f + shutter / 2]
-    (in frames), so the sub-frames average to the exposure centre, frame f."""
-    return [frame + shutter * ((k + 0.5) / subframes - 0.5) for k in range(subframes)]
-
-
-def _camera_at(cameras: list, time: float):
-    """A view's camera at fractional frame ``time`` (clamped to the clip)."""
-    t = float(np.clip(time, 0, len(cameras) - 1))
-    i = min(int(t), len(cameras) - 1)
-    return cameras[i].blended(cameras[min(i + 1, len(cameras) - 1)], t - i)
-
-
-@dataclass
-class _Keys:
-    """Subject shapes posed at a few times of the exposure; sub-frames between them move each
-    vertex (normal, hair point) linearly, so a sub-frame costs an in-place update, not a posing."""
-
-    times: list
-    meshes: dict = field(default_factory=dict)   # name -> [(vertices, normals)] per time
-    curves: dict = field(default_factory=dict)   # name -> [points] per time
-
-    def take(self, scene, names: list) -> None:
-        """Append the shapes' positions now as the next key."""
-        for n in names:
-            if n in scene.meshes:
-                m = scene.meshes[n]
-                self.meshes.setdefault(n, []).append((m.vertices, m.normals))
-            else:
-                self.curves.setdefault(n, []).append(scene.curves[n].points)
-
-    def geometry(self, k: int) -> Geometry:
-        """Key ``k`` as flow's ``Geometry``."""
-        return Geometry({n: keyed[k][0] for n, keyed in self.meshes.items()},
-                        {n: keyed[k] for n, keyed in self.curves.items()})
-
-    def restore(self, scene, k: int) -> None:
-        """Put key ``k``'s arrays back as they were (bit for bit)."""
-        for n, keyed in self.meshes.items():
-            scene.update_mesh(n, *keyed[k])
-        for n, keyed in self.curves.items():
-            scene.update_curves(n, keyed[k])
-
-    def move(self, scene, time: float) -> None:
-        k = int(np.clip(np.searchsorted(self.times, time) - 1, 0, len(self.times) - 2))
-        a = (time - self.times[k]) / (self.times[k + 1] - self.times[k])
-        for n, keyed in self.meshes.items():
-            (v0, n0), (v1, n1) = keyed[k], keyed[k + 1]
-            normals = None if n0 is None else (1 - a) * n0 + a * n1
-            if normals is not None:
-                normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
-            scene.update_mesh(n, (1 - a) * v0 + a * v1, normals)
-        for n, keyed in self.curves.items():
-            scene.update_curves(n, (1 - a) * keyed[k] + a * keyed[k + 1])
-
-
-def _subject_shapes(scene, placed: list) -> list:
-    prefixes = tuple(f"{p.prefix}_" for p in placed)
-    return [n for n in list(scene.meshes) + list(scene.curves) if n.startswith(prefixes)]
-
-
-def _exposure_keys(scene, placed: list, frame: int, times: list) -> _Keys:
-    """The subjects posed at the exposure's first sub-frame, its centre (the frame, posed
-    already: key 1) and its last sub-frame."""
-    names = _subject_shapes(scene, placed)
-    centre = _Keys([])
-    centre.take(scene, names)
-    keys = _Keys([times[0], float(frame), times[-1]])
-    for t in (times[0], None, times[-1]):
-        if t is None:
-            keys.meshes = {n: v + centre.meshes[n] for n, v in keys.meshes.items()}
-            keys.curves = {n: v + centre.curves[n] for n, v in keys.curves.items()}
-            continue
-        for p in placed:
-            p.pose_at(scene, t)
-        keys.take(scene, names)
-    return keys
-
-
-def exposure_motion(scene, keys: _Keys, cameras: list, frame: int, times: list) -> np.ndarray:
-    """(H, W, 2) pixels: the image motion over the whole exposure of the point each pixel-centre
-    ray hits at ``frame`` (its centre): where it is seen at the last sub-frame minus where at the
-    first, times n / (n - 1) for the exposure's full length (the motion is taken linear, as the
-    sub-frames take it). The blur's extent and direction; 0 on background. The scene holds the centre."""
-    cam = cameras[frame]
-    hits = pixel_hits(scene, cam)
-    ends = []
-    for k, t in ((0, times[0]), (2, times[-1])):
-        P = points_at(scene, hits, cam.center, hits["rays"], keys.geometry(1), keys.geometry(k))
-        ends.append((np.isfinite(P[:, 0]), _camera_at(cameras, t).project(np.nan_to_num(P))[0]))
-    ok = ends[0][0] & ends[1][0]
-    span = len(times) / (len(times) - 1)
-    motion = np.where(ok[:, None], (ends[1][1] - ends[0][1]) * span, 0.0)
-    return motion.reshape(cam.height, cam.width, 2).astype(np.float32)
-
-
-@dataclass
-class Exposure:
-    """A view's motion-blurred frame: the RGB, the denoising guides averaged like it (with
-    ``denoise="oidn"``), and the blur vectors (``exposure_motion``, when asked for)."""
-
-    rgb: np.ndarray | None
-    guides: tuple | None = None
-    motion: np.ndarray | None = None
-
-
-class _Accumulator:
-    """Sample-weighted sums of a view's sub-frame images."""
-
-    def __init__(self):
-        self.rgb, self.albedo, self.normal = 0.0, 0.0, 0.0
-
-    def add(self, weight: float, rgb: np.ndarray, aux: tuple | None, aux_weight: float) -> None:
-        self.rgb = self.rgb + weight * rgb.astype(np.float64)
-        if aux is not None:
-            self.albedo, self.normal = self.albedo + aux_weight * aux[0], self.normal + aux_weight * aux[1]
-
-    def exposure(self, with_guides: bool) -> Exposure:
-        guides = (np.asarray(self.albedo, np.float32), np.asarray(self.normal, np.float32)) if with_guides else None
-        return Exposure(np.asarray(self.rgb, np.float32), guides)
-
-
-def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, subframes: int, spp: int, seed: int,
-                 render_args: dict, motion: bool = False) -> dict[str, Exposure]:
-    """Each view's motion-blurred ``Exposure`` at ``frame`` (subjects posed there): ``min(subframes,
-    spp)`` renders across the exposure, each with its share of ``spp`` (the total stays
-    ``spp``), averaged by samples; with ``render_args["denoise"] == "oidn"`` the guides are
-    traced per sub-frame too (``GUIDE_SPP`` shared likewise) so they blur as the colour does.
-    Subjects are posed at the exposure's first and last sub-frame and its centre, and move
-    linearly between those keys (``_Keys``); moving cameras are blended per sub-frame. The scene
-    is left posed at ``frame`` with its previous positions (flow's) as they were. With
-    ``motion``, each view's ``exposure_motion``."""
-    n = min(subframes, spp)
-    shares = [spp // n + (k < spp % n) for k in range(n)]
-    times = subframe_times(frame, shutter, n)
-    kept = ({k: m.previous_vertices for k, m in scene.meshes.items()},
-            {k: c.previous_points for k, c in scene.curves.items()})
-    keys = _exposure_keys(scene, placed, frame, times) if n > 1 else None
-    args = {k: v for k, v in render_args.items() if k in ("max_depth", "rfilter", "sampler")}
-    denoised = render_args.get("denoise", "none") == "oidn"
-    guide_spp = max(1, GUIDE_SPP // n) if denoised else 0
-    sums = {v.name: _Accumulator() for v in views}
-    for k, (t, share) in enumerate(zip(times, shares)):
-        if keys is not None:
-            keys.move(scene, t)
-        for v in views:
-            rgb, aux = render_rgb(scene, _camera_at(v.cameras, t), share, subframe_seed(seed + frame, k), guide_spp=guide_spp,
-                                  **args)
-            sums[v.name].add(share / spp, rgb, aux, 1 / n)  # guides: the same spp every sub-frame
-    out = {name: acc.exposure(denoised) for name, acc in sums.items()}
-    if keys is not None:
-        keys.restore(scene, 1)  # the frame's own positions, bit for bit
-        if motion:
-            for v in views:
-                out[v.name].motion = exposure_motion(scene, keys, v.cameras, frame, times)
-    for k, prev in kept[0].items():
-        scene.meshes[k].previous_vertices = prev
-    for k, prev in kept[1].items():
-        scene.curves[k].previous_points = prev
-    return out
+def _camera_effects(sample, exposure: Exposure, photo: Photo | None, rng) -> None:
+    """The blur vectors of a motion-blurred sample, and its RGB developed into a photo (the
+    rendered radiance kept as ``rgb_clean``)."""
+    if exposure.motion is not None:
+        sample.passes["motion_blur"] = exposure.motion
+    if photo is not None:
+        sample.passes["rgb_clean"] = sample.passes["rgb"]
+        sample.passes["rgb"] = develop(sample.passes["rgb"], photo, rng)
+        sample.meta["photo"] = photo.to_dict()

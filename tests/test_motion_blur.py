@@ -43,7 +43,7 @@ def _sinusoid(img):
 
 
 def test_blur_of_a_moving_grating_matches_the_box_filter(sm):
-    from synmitsuba.pipeline import blurred_rgbs
+    from synmitsuba.motion_blur import blurred_rgbs
     scene, cams = _grating_scene(sm), _cameras(sm)
     view = SimpleNamespace(name="cam0", cameras=cams)
     sharp = sm.render(scene, cams[1], spp=64, seed=1).passes["rgb"]
@@ -65,7 +65,7 @@ def test_blur_of_a_moving_grating_matches_the_box_filter(sm):
 
 
 def test_sub_frames_share_the_samples_and_centre_on_the_frame(sm):
-    from synmitsuba.pipeline import subframe_times
+    from synmitsuba.motion_blur import subframe_times
     t = subframe_times(10, 0.5, 8)
     assert len(t) == 8 and np.mean(t) == pytest.approx(10) and max(t) - min(t) == pytest.approx(0.5 * 7 / 8)
     cams = _cameras(sm)
@@ -121,7 +121,7 @@ def test_sub_frame_noise_is_not_correlated_between_neighbours(sm):
     """Sub-frames rendered with consecutive seeds made ldsampler's noise correlate between
     horizontal neighbours (0.73: streaks); hashed sub-frame seeds keep pixels independent."""
     import trimesh
-    from synmitsuba.pipeline import blurred_rgbs
+    from synmitsuba.motion_blur import blurred_rgbs
     scene = sm.Scene()
     wall = trimesh.creation.box((6, 4, 0.1))
     wall.apply_translation((0, 1, -2))
