@@ -5,6 +5,7 @@ moved linearly between them; moving cameras are interpolated per sub-frame.
 """
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,64 +34,54 @@ class _Keys:
     """Subject shapes posed at a few times of the exposure; sub-frames between them move each
     vertex (normal, hair point) linearly, so a sub-frame costs an in-place update, not a posing."""
 
-    times: list
-    meshes: dict = field(default_factory=dict)   # name -> [(vertices, normals)] per time
-    curves: dict = field(default_factory=dict)   # name -> [points] per time
+    names: list
+    times: list = field(default_factory=list)
+    meshes: list = field(default_factory=list)   # per key: {name: (vertices, normals)}
+    curves: list = field(default_factory=list)   # per key: {name: points}
 
-    def take(self, scene, names: list) -> None:
-        """Append the shapes' positions now as the next key."""
-        for n in names:
-            if n in scene.meshes:
-                m = scene.meshes[n]
-                self.meshes.setdefault(n, []).append((m.vertices, m.normals))
-            else:
-                self.curves.setdefault(n, []).append(scene.curves[n].points)
+    def take(self, scene, time: float) -> None:
+        """Add the shapes' positions now as the key at ``time`` (kept in time order)."""
+        k = bisect.bisect(self.times, time)
+        self.times.insert(k, float(time))
+        self.meshes.insert(k, {n: (scene.meshes[n].vertices, scene.meshes[n].normals) for n in self.names
+                               if n in scene.meshes})
+        self.curves.insert(k, {n: scene.curves[n].points for n in self.names if n in scene.curves})
 
     def geometry(self, k: int) -> Geometry:
         """Key ``k`` as flow's ``Geometry``."""
-        return Geometry({n: keyed[k][0] for n, keyed in self.meshes.items()},
-                        {n: keyed[k] for n, keyed in self.curves.items()})
+        return Geometry({n: v for n, (v, _) in self.meshes[k].items()}, dict(self.curves[k]))
 
     def restore(self, scene, k: int) -> None:
         """Put key ``k``'s arrays back as they were (bit for bit)."""
-        for n, keyed in self.meshes.items():
-            scene.update_mesh(n, *keyed[k])
-        for n, keyed in self.curves.items():
-            scene.update_curves(n, keyed[k])
+        for n, (v, normals) in self.meshes[k].items():
+            scene.update_mesh(n, v, normals)
+        for n, p in self.curves[k].items():
+            scene.update_curves(n, p)
 
     def move(self, scene, time: float) -> None:
+        """Every shape where linear motion between the keys around ``time`` puts it."""
         k = int(np.clip(np.searchsorted(self.times, time) - 1, 0, len(self.times) - 2))
         a = (time - self.times[k]) / (self.times[k + 1] - self.times[k])
-        for n, keyed in self.meshes.items():
-            (v0, n0), (v1, n1) = keyed[k], keyed[k + 1]
+        for n, (v0, n0) in self.meshes[k].items():
+            v1, n1 = self.meshes[k + 1][n]
             normals = None if n0 is None else (1 - a) * n0 + a * n1
             if normals is not None:
                 normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
             scene.update_mesh(n, (1 - a) * v0 + a * v1, normals)
-        for n, keyed in self.curves.items():
-            scene.update_curves(n, (1 - a) * keyed[k] + a * keyed[k + 1])
-
-
-def _subject_shapes(scene, placed: list) -> list:
-    prefixes = tuple(f"{p.prefix}_" for p in placed)
-    return [n for n in list(scene.meshes) + list(scene.curves) if n.startswith(prefixes)]
+        for n, p0 in self.curves[k].items():
+            scene.update_curves(n, (1 - a) * p0 + a * self.curves[k + 1][n])
 
 
 def _exposure_keys(scene, placed: list, frame: int, times: list) -> _Keys:
     """The subjects posed at the exposure's first sub-frame, its centre (the frame, posed
     already: key 1) and its last sub-frame."""
-    names = _subject_shapes(scene, placed)
-    centre = _Keys([])
-    centre.take(scene, names)
-    keys = _Keys([times[0], float(frame), times[-1]])
-    for t in (times[0], None, times[-1]):
-        if t is None:
-            keys.meshes = {n: v + centre.meshes[n] for n, v in keys.meshes.items()}
-            keys.curves = {n: v + centre.curves[n] for n, v in keys.curves.items()}
-            continue
+    prefixes = tuple(f"{p.prefix}_" for p in placed)
+    keys = _Keys([n for n in list(scene.meshes) + list(scene.curves) if n.startswith(prefixes)])
+    keys.take(scene, frame)
+    for t in (times[0], times[-1]):
         for p in placed:
             p.pose_at(scene, t)
-        keys.take(scene, names)
+        keys.take(scene, t)
     return keys
 
 
@@ -150,28 +141,23 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
     n = min(subframes, spp)
     shares = [spp // n + (k < spp % n) for k in range(n)]
     times = subframe_times(frame, shutter, n)
-    kept = ({k: m.previous_vertices for k, m in scene.meshes.items()},
-            {k: c.previous_points for k, c in scene.curves.items()})
-    keys = _exposure_keys(scene, placed, frame, times) if n > 1 else None
     args = {k: v for k, v in render_args.items() if k in ("max_depth", "rfilter", "sampler")}
     denoised = render_args.get("denoise", "none") == "oidn"
     guide_spp = max(1, GUIDE_SPP // n) if denoised else 0
     sums = {v.name: _Accumulator() for v in views}
-    for k, (t, share) in enumerate(zip(times, shares)):
-        if keys is not None:
-            keys.move(scene, t)
-        for v in views:
-            rgb, aux = render_rgb(scene, _camera_at(v.cameras, t), share, subframe_seed(seed + frame, k), guide_spp=guide_spp,
-                                  **args)
-            sums[v.name].add(share / spp, rgb, aux, 1 / n)  # guides: the same spp every sub-frame
-    out = {name: acc.exposure(denoised) for name, acc in sums.items()}
-    if keys is not None:
-        keys.restore(scene, 1)  # the frame's own positions, bit for bit
-        if motion:
+    with scene.keeping_previous():
+        keys = _exposure_keys(scene, placed, frame, times) if n > 1 else None
+        for k, (t, share) in enumerate(zip(times, shares)):
+            if keys is not None:
+                keys.move(scene, t)
             for v in views:
-                out[v.name].motion = exposure_motion(scene, keys, v.cameras, frame, times)
-    for k, prev in kept[0].items():
-        scene.meshes[k].previous_vertices = prev
-    for k, prev in kept[1].items():
-        scene.curves[k].previous_points = prev
+                rgb, aux = render_rgb(scene, _camera_at(v.cameras, t), share, subframe_seed(seed + frame, k),
+                                      guide_spp=guide_spp, **args)
+                sums[v.name].add(share / spp, rgb, aux, 1 / n)  # guides: the same spp every sub-frame
+        out = {name: acc.exposure(denoised) for name, acc in sums.items()}
+        if keys is not None:
+            keys.restore(scene, 1)  # the frame's own positions, bit for bit
+            if motion:
+                for v in views:
+                    out[v.name].motion = exposure_motion(scene, keys, v.cameras, frame, times)
     return out

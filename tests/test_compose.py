@@ -425,3 +425,22 @@ def test_a_group_no_camera_frames_is_placed_tighter_before_composition_fails(sm,
     monkeypatch.setattr(cams, "candidates", lambda *a, **k: [])
     with pytest.raises(cams.NoViewFits, match="cameras.distance_max"):
         composition.compose_scene(SMALL, np.random.default_rng(2))
+
+
+def test_subjects_left_out_get_new_motions_and_the_scene_uses_them(sm, monkeypatch):
+    """When placement leaves a subject out, composition draws it a new motion and places
+    everyone again; the scene must carry the new motion (the one whose clip was placed)."""
+    from dataclasses import replace as dc_replace
+
+    from synmitsuba.compose import composition
+    real, calls = composition.place_subjects, []
+
+    def leave_one_out_first(hulls, *args, **kwargs):
+        calls.append(1)
+        placed = real(hulls, *args, **kwargs)
+        return [p for p in placed if p.index != 1] if len(calls) == 1 else placed
+    monkeypatch.setattr(composition, "place_subjects", leave_one_out_first)
+    monkeypatch.setattr(composition, "_redraw_motion",  # the same clip under a new name: hulls unchanged
+                        lambda d, *a: dc_replace(d, motion=dc_replace(d.motion, seed=123456789)))
+    spec = composition.compose_scene(SMALL, np.random.default_rng(2))
+    assert len(calls) == 2 and [s.motion.seed == 123456789 for s in spec.subjects] == [False, True]

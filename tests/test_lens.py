@@ -159,3 +159,32 @@ def test_generated_views_sample_lenses_and_their_keypoints_follow_opencv(tmp_pat
             assert np.abs(ref - rec["keypoints2d"]).max() < 1e-3
             depth = (cam.R @ rec["keypoints3d_world"].T).T[:, 2] + cam.t[2]
             assert depth.min() - 0.5 < cam.focus_distance < depth.max() + 0.5
+
+
+def test_a_scene_file_camera_carries_its_lens_and_bad_coefficients_name_the_key(tmp_path):
+    """Scene files take lens keys per camera and shutter / photo in render; a wrong coefficient
+    count is one error naming cameras[i].dist; ``synmitsuba render`` passes render's effects on."""
+    import textwrap
+    from types import SimpleNamespace
+
+    from synmitsuba.cli.render import scene_config
+    from synmitsuba.compose.scenefile import check_scene_file, scene_cameras
+    text = textwrap.dedent("""
+        render: {spp: 8, width: 64, height: 48, shutter_deg: 90, subframes: 4, photo: {enabled: true, iso: [400, 400]}}
+        environment: {type: constant, radiance: 1.0}
+        cameras:
+          - {name: a, look_at: {eye: [0, 1, 4], target: [0, 1, 0], fov_y_deg: 40}, dist: [-0.1, 0.01, 0, 0, 0],
+             aperture_radius: 0.01, focus_distance: 4.0}
+          - {name: b, look_at: {eye: [0, 1, 4], target: [0, 1, 0], fov_y_deg: 40}, lens: fisheye, dist: [0.1, 0, 0, 0, 0]}
+    """)
+    (tmp_path / "s.yaml").write_text(text)
+    with pytest.raises(ConfigError, match=r"cameras\[1\]\.dist"):
+        scene_cameras(check_scene_file(str(tmp_path / "s.yaml")))
+    (tmp_path / "s.yaml").write_text(text.replace("lens: fisheye, dist: [0.1, 0, 0, 0, 0]", "lens: fisheye"))
+    doc = check_scene_file(str(tmp_path / "s.yaml"))
+    (_, a), (_, b) = scene_cameras(doc)
+    assert list(a.dist) == [-0.1, 0.01, 0, 0, 0] and a.aperture_radius == 0.01 and a.focus_distance == 4.0
+    assert b.lens == "fisheye" and not b.distorted
+    args = SimpleNamespace(spp=None, denoise=None, seed=None, frames=1, stride=1, no_labels=False, scene=str(tmp_path / "s.yaml"))
+    r = scene_config(args, doc).render
+    assert r.shutter_deg == [90.0, 90.0] and r.subframes == 4 and r.photo.enabled and r.photo.iso == [400.0, 400.0]

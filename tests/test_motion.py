@@ -346,3 +346,16 @@ def test_cmu_bvh_retargets_onto_anny_with_the_builtin_map(tmp_path):
         v = pt[:, anny.index(d)] - pt[:, anny.index(c)]
         cos = (u * v).sum(1) / np.linalg.norm(u, axis=1) / np.linalg.norm(v, axis=1)
         assert cos.min() > 1 - 1e-6, (a, c)
+
+
+def test_pose_between_frames_is_the_slerp_of_its_neighbours():
+    """Motion.at (motion blur's sub-frames) against scipy's Slerp per joint (geometry.slerp_matrices)
+    and the root's linear interpolation; whole times are the frames themselves, and times
+    outside the clip clamp to its ends."""
+    from synmitsuba.geometry import slerp_matrices
+    m = sm.procedural_motion("walk", np.random.default_rng(0), seconds=0.5)
+    rot, root = m.at(3.3)
+    assert np.allclose(rot, slerp_matrices(m.rotations, np.array([3.3]))[0], atol=1e-9)
+    assert np.allclose(root, 0.7 * m.root_translation[3] + 0.3 * m.root_translation[4])
+    assert np.array_equal(m.at(3)[0], m.rotations[3]) and np.array_equal(m.at(-1.0)[1], m.root_translation[0])
+    assert np.array_equal(m.at(m.n_frames + 2.5)[0], m.rotations[-1])

@@ -144,18 +144,15 @@ def subjects_geometry(subjects: list, frame: int) -> Geometry:
 
 def _hidden(scene: Scene, eye, points, now: Geometry, then: Geometry) -> np.ndarray:
     """Whether each point, at the other frame, is behind another surface seen from ``eye``."""
-    saved = {n: (scene.curves[n].points, scene.curves[n].previous_points) for n in then.curves if n in scene.curves}
-    previous = {n: scene.meshes[n].previous_vertices for n in then.vertices}
-    _apply(scene, then)
-    try:
-        return _blocked(scene, eye, points)
-    finally:  # back to this frame, with the scene's own previous positions kept
-        _apply(scene, now)
-        for n, (points_now, prev) in saved.items():
-            scene.update_curves(n, points_now)
-            scene.curves[n].previous_points = prev
-        for n, prev in previous.items():
-            scene.meshes[n].previous_vertices = prev
+    curves_now = {n: scene.curves[n].points for n in then.curves if n in scene.curves}
+    with scene.keeping_previous():  # back to this frame, with the scene's own previous positions kept
+        _apply(scene, then)
+        try:
+            return _blocked(scene, eye, points)
+        finally:
+            _apply(scene, now)
+            for n, points_now in curves_now.items():
+                scene.update_curves(n, points_now)
 
 
 class _GeometryCache:

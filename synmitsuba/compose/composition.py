@@ -107,29 +107,27 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
     drafts = [_draft(sc, sources, cfg.base, i, rng) for i in range(count)]
     boxes = object_boxes(env)
-    for k, shrink in enumerate(GROUP_SHRINK):  # while no camera frames the group, place it tighter
+
+    def composed(shrink: float) -> SceneSpec:  # cams.NoViewFits when no camera frames the group
         placing = cfg if shrink == 1.0 else replace(
             cfg, placement=replace(cfg.placement, group_radius=cfg.placement.group_radius * shrink))
-        placements, placed = _placed(list(drafts), env, boxes, placing, sources, rng)
-        spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, _subject_specs(placed, placements, env),
-                          [], len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
+        pool = list(drafts)  # _place draws new motions into it for subjects left out
+        placements = _place(pool, env, boxes[:, [0, 2, 3, 5]], placing, sources, rng)
+        placed = [pool[p.index] for p in placements]  # all, unless placement warned
+        spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, _subject_specs(placed, placements, env), [],
+                          len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
         spec_.build([d.human for d in placed])
+        spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
+        return spec_
+    for shrink in GROUP_SHRINK[:-1]:  # while no camera frames the group, place it tighter
         try:
-            spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
-            return spec_
+            return composed(shrink)
         except cams.NoViewFits:
-            if k == len(GROUP_SHRINK) - 1:
-                raise
-    raise AssertionError("unreachable")
+            pass
+    return composed(GROUP_SHRINK[-1])
 
 
 GROUP_SHRINK = (1.0, 0.6, 0.35)  # group radii tried, times placement.group_radius, while no camera frames the group
-
-
-def _placed(drafts: list, env, boxes: np.ndarray, cfg: ComposeConfig, sources: list, rng) -> tuple[list, list]:
-    """(placements, the drafts placed, in the same order)."""
-    placements = _place(drafts, env, boxes[:, [0, 2, 3, 5]], cfg, sources, rng)
-    return placements, [drafts[p.index] for p in placements]  # all, unless placement warned
 
 
 def _subject_specs(drafts: list, placements: list, env) -> list:

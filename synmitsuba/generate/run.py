@@ -21,6 +21,7 @@ from synmitsuba.errors import ConfigError
 from synmitsuba.generate.config import GenerateConfig
 from synmitsuba.generate.executors import EXECUTORS, Failure
 from synmitsuba.io.files import ACTIVE_TEMPORARIES, atomic_path
+from synmitsuba.rendering.photo import Photo
 from synmitsuba.seeds import effects_rng, render_seed, sequence_rng
 
 
@@ -35,24 +36,14 @@ def sequence_spec(cfg: GenerateConfig, index: int):
     return compose_scene(cfg.compose, rng, seed=cfg.seed)
 
 
-def sequence_shutter(cfg: GenerateConfig, index: int) -> float:
-    """Sequence ``index``'s exposure as a share of the frame interval, drawn from
-    ``render.shutter_deg`` (nothing drawn when it is off)."""
-    lo, hi = cfg.render.shutter_deg
-    if hi <= 0:
-        return 0.0
-    return float(effects_rng(cfg.seed, index).uniform(lo, hi)) / 360.0
-
-
-def sequence_photo(cfg: GenerateConfig, index: int):
-    """Sequence ``index``'s photo development (``render.photo``), or None when it is off.
-    Drawn after the shutter from the same effects generator."""
-    if not cfg.render.photo.enabled:
-        return None
+def sequence_effects(cfg: GenerateConfig, index: int) -> tuple[float, Photo | None]:
+    """Sequence ``index``'s camera effects, drawn in this order from ``effects_rng`` (nothing for
+    what is off): its exposure as a share of the frame interval (``render.shutter_deg`` / 360)
+    and its photo development (``render.photo``; None when off)."""
     rng = effects_rng(cfg.seed, index)
-    if cfg.render.shutter_deg[1] > 0:
-        rng.uniform()  # the shutter's draw (sequence_shutter)
-    return cfg.render.photo.draw(rng)
+    lo, hi = cfg.render.shutter_deg
+    shutter = float(rng.uniform(lo, hi)) / 360.0 if hi > 0 else 0.0
+    return shutter, (cfg.render.photo.draw(rng) if cfg.render.photo.enabled else None)
 
 
 def sequence_frames(cfg: GenerateConfig, n_frames: int) -> list[int]:
@@ -70,13 +61,13 @@ def write_sequence(spec, cfg: GenerateConfig, index: int, folder: str, bar=None)
     with open(os.path.join(folder, "scene.json"), "w") as fh:
         fh.write(spec.to_json(indent=1))
     r, stems = cfg.render, []
+    shutter, photo = sequence_effects(cfg, index)
     try:
         for f, view, sample in render_sequence(spec, frames=sequence_frames(cfg, spec.n_frames), spp=r.spp,
                                                seed=render_seed(cfg.seed, index), annotate=cfg.annotate,
                                                body_models=cfg.smplx, flow="rendered" if cfg.flow == "rendered" else 1,
                                                max_depth=r.max_depth, sampler=r.sampler, denoise=r.denoise,
-                                               shutter=sequence_shutter(cfg, index), subframes=r.subframes,
-                                               photo=sequence_photo(cfg, index)):
+                                               shutter=shutter, subframes=r.subframes, photo=photo):
             sample.meta.update(sequence=index)
             stem = f"f{f:04d}_{view}"
             write_sample(sample, os.path.join(folder, stem))

@@ -45,13 +45,18 @@ def render_rgb(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_d
     """The path-traced RGB alone (H, W, 3 float32 linear), what ``render`` traces, for callers
     that combine several (motion blur's sub-frames); with ``guide_spp``, also the denoising
     guides (albedo, normal) at that many samples per pixel, else None."""
-    import mitsuba as mi
     sensor_mod.register(require_variant())
     built = build(scene)
     sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, choose_sampler(sampler, spp))
-    rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth), spp=spp,
-                             seed=seed), dtype=np.float32)[..., :3]
+    rgb = _trace(built, sensor_dict, spp, seed, max_depth)
     return rgb, (guides(built.mi_scene, sensor_dict, seed, guide_spp) if guide_spp else None)
+
+
+def _trace(built, sensor_dict: dict, spp: int, seed: int, max_depth: int) -> np.ndarray:
+    """The path tracer's linear RGB (H, W, 3 float32) through the sensor ``sensor_dict``."""
+    import mitsuba as mi
+    return np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth),
+                              spp=spp, seed=seed), dtype=np.float32)[..., :3]
 
 
 def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6,
@@ -67,7 +72,6 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     instead of tracing one; the exact passes are this scene's and camera's. ``denoise_guides``:
     the (albedo, normal) that image was traced with (motion blur's: averaged over its sub-frames,
     so the denoiser does not sharpen what moved), instead of this scene's."""
-    import mitsuba as mi
     spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
                                         (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
     seed = Number(0, 2 ** 32 - 1, integer=True)("seed", seed)
@@ -86,8 +90,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     chosen = choose_sampler(sampler, spp)
     sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, chosen)
     if rgb is None:
-        rgb = np.array(mi.render(built.mi_scene, sensor=mi.load_dict(sensor_dict), integrator=_integrator(max_depth),
-                                 spp=spp, seed=seed), dtype=np.float32)[..., :3]
+        rgb = _trace(built, sensor_dict, spp, seed, max_depth)
     elif np.shape(rgb) != (camera.height, camera.width, 3):
         raise ConfigError("rgb", f"array{np.shape(rgb)}", f"give ({camera.height}, {camera.width}, 3): the camera's image")
     extra = {}

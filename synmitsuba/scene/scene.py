@@ -9,6 +9,7 @@ too, so no change can leave a stale build behind.
 """
 from __future__ import annotations
 
+import contextlib
 import re
 from dataclasses import dataclass, field
 
@@ -177,6 +178,20 @@ class Scene:
             c.radius = r.copy()
         c.previous_points, c.points = c.points, p
         self.geometry_version += 1
+
+    @contextlib.contextmanager
+    def keeping_previous(self):
+        """Shapes moved inside the block (to another frame and back, sub-frames) keep the
+        previous positions (flow's) they had before it."""
+        meshes = {n: m.previous_vertices for n, m in self.meshes.items()}
+        curves = {n: c.previous_points for n, c in self.curves.items()}
+        try:
+            yield self
+        finally:
+            for n, prev in meshes.items():
+                self.meshes[n].previous_vertices = prev
+            for n, prev in curves.items():
+                self.curves[n].previous_points = prev
 
     def remove(self, name: str) -> None:
         if self.meshes.pop(name, None) is None and self.curves.pop(name, None) is None:
