@@ -56,21 +56,6 @@ class Camera:
         self.t = _matrix("camera.t", self.t, (3,))
         self.width = PIXELS("camera.width", self.width)
         self.height = PIXELS("camera.height", self.height)
-        if self.lens not in LENS_MODELS:
-            raise ConfigError("camera.lens", self.lens, f"use one of {', '.join(LENS_MODELS)}")
-        n = len(LENS_MODELS[self.lens].coefficients)
-        self.dist = np.zeros(n) if self.dist is None else _matrix("camera.dist", self.dist, (n,))
-        if self.distorted:
-            reach = folded_radius(self.lens, self.dist)
-            if image_radius(self.K, self.width, self.height) > 0.98 * reach:
-                raise ConfigError("camera.dist", np.asarray(self.dist).tolist(),
-                                  f"this distortion folds back inside the image (its radius stops growing at "
-                                  f"{reach:.3f} in normalised coordinates, the corners reach "
-                                  f"{image_radius(self.K, self.width, self.height):.3f}): use smaller coefficients")
-        if not (np.isfinite(self.aperture_radius) and self.aperture_radius >= 0):
-            raise ConfigError("camera.aperture_radius", self.aperture_radius, "give a radius >= 0 in metres")
-        if not (np.isfinite(self.focus_distance) and self.focus_distance > 0):
-            raise ConfigError("camera.focus_distance", self.focus_distance, "give a distance > 0 in metres")
         if not np.allclose(self.K[2], [0, 0, 1]):
             raise ConfigError("camera.K", self.K.tolist(), "the last row of K must be [0, 0, 1]")
         if self.K[0, 0] <= 0 or self.K[1, 1] <= 0:
@@ -80,6 +65,26 @@ class Camera:
                               "[[fx, skew, cx], [0, fy, cy], [0, 0, 1]]")
         if not np.allclose(self.R @ self.R.T, np.eye(3), atol=1e-6) or np.linalg.det(self.R) < 0:
             raise ConfigError("camera.R", self.R.tolist(), "R must be a rotation (orthonormal, det +1)")
+        self._check_lens()
+
+    def _check_lens(self) -> None:
+        """The distortion model and coefficients (refused when the image folds back on itself)
+        and the thin lens; K is checked already."""
+        if self.lens not in LENS_MODELS:
+            raise ConfigError("camera.lens", self.lens, f"use one of {', '.join(LENS_MODELS)}")
+        n = len(LENS_MODELS[self.lens].coefficients)
+        self.dist = np.zeros(n) if self.dist is None else _matrix("camera.dist", self.dist, (n,))
+        if self.distorted:
+            reach, corners = folded_radius(self.lens, self.dist), image_radius(self.K, self.width, self.height)
+            if corners > 0.98 * reach:
+                raise ConfigError("camera.dist", np.asarray(self.dist).tolist(),
+                                  f"this distortion folds back inside the image (its radius stops growing at "
+                                  f"{reach:.3f} in normalised coordinates, the corners reach {corners:.3f}): "
+                                  "use smaller coefficients")
+        if not (np.isfinite(self.aperture_radius) and self.aperture_radius >= 0):
+            raise ConfigError("camera.aperture_radius", self.aperture_radius, "give a radius >= 0 in metres")
+        if not (np.isfinite(self.focus_distance) and self.focus_distance > 0):
+            raise ConfigError("camera.focus_distance", self.focus_distance, "give a distance > 0 in metres")
 
     # -- construction ------------------------------------------------------------------
     @staticmethod
