@@ -72,6 +72,7 @@ class SubjectLabels(_Record):
     body_params_world: BodyParams = field(default_factory=BodyParams)
     body_params_cam: BodyParams = field(default_factory=BodyParams)
     root_world: np.ndarray = _array()                  # (3,)
+    gaze_cam: np.ndarray = _array()                    # (2, 3) unit gaze of the left, right eye, camera frame
     valid: bool = False
     layer_pixels: dict = field(default_factory=dict)   # visible pixels per layer name
     extra: dict = field(default_factory=dict)          # body-model fits: smplx_world, smplx_cam, smpl_world, ...

@@ -12,7 +12,8 @@ pixels; ``bbox_visible``, ``bbox_amodal``, ``bbox_keypoints`` ``[x_min, y_min, x
 pixel edges (None when empty) with ``center`` and ``scale`` = 1.2 max(w, h) / 200 of the
 keypoint box (the crop top-down HMR code takes); ``body_params_world`` / ``body_params_cam``
 (``root_translation`` (3,), ``rotations`` (J, 3) axis-angle, local, root first in skeleton
-order; ``phenotypes``); ``root_world`` (3,); ``valid``.
+order; ``phenotypes``); ``root_world`` (3,); ``gaze_cam`` (2, 3) unit gaze of the left and right
+eye in the camera frame; ``valid``.
 """
 from __future__ import annotations
 
@@ -168,7 +169,8 @@ class Annotator:
             amodal_mask=amodal, visible_fraction=float(visible.sum() / n_amodal) if n_amodal else 0.0,
             bbox_visible=mask_box(visible), bbox_amodal=mask_box(amodal), bbox_keypoints=box, center=centre, scale=scale,
             body_params_world=BodyParams(matrix_to_axis_angle(rot), np.asarray(root, np.float64), phen),
-            body_params_cam=BodyParams(matrix_to_axis_angle(rot_c), root_c, phen), root_world=joints[0])
+            body_params_cam=BodyParams(matrix_to_axis_angle(rot_c), root_c, phen), root_world=joints[0],
+            gaze_cam=p.human.gaze(rot, root) @ cam.R.T)
 
 
 def _joints(skeleton, rot, root) -> np.ndarray:

@@ -12,6 +12,7 @@ import numpy as np
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
+from synmitsuba.body.eyes import Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
                                       build_garment, garment_offset, metres_per_uv)
@@ -96,6 +97,11 @@ class LayeredHuman:
         body.vertices = body.vertices + [0, lift, 0]
         body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
                                             body.skeleton.rest_positions + [0, lift, 0])
+        self.eyes: Eyeballs = fit_eyeballs(body.vertices, body.skeleton)
+        body.vertices = hide_helpers(body.vertices, self.eyes)
+        rest = body.skeleton.rest_positions.copy()
+        rest[list(self.eyes.bones)] = self.eyes.centres  # the eyes turn about their eyeballs' centres
+        body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents, rest)
         self.body: BodyMesh = body
         self.split = split_at_seams(body.faces, body.face_uv, body.uv)
         self._incidence = incidence(body.faces, len(body.vertices))
@@ -127,6 +133,7 @@ class LayeredHuman:
         clothes = [not GARMENTS[p.name].footwear for p in garments]
         for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
             part.inner = clothes[k] and any(clothes[k + 1:])
+        self._build_eyes()
         self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
         self._build_accessories()
@@ -164,6 +171,13 @@ class LayeredHuman:
                                         if p.name in GARMENTS and not GARMENTS[p.name].footwear], reachable)
         self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head.ears)
         self.head_bone = sk.index("head")
+
+    def _build_eyes(self) -> None:
+        """Both eyeballs as one part on the body layer, each rigid to its eye bone."""
+        v, f, uv, side = eyeball_meshes(self.eyes, self.recipe.eyes.iris_deg)
+        weights = np.zeros((len(v), len(self.skeleton)))
+        weights[np.arange(len(v)), np.asarray(self.eyes.bones)[side]] = 1.0
+        self.parts.append(_Part("eyes", int(Layer.BODY), eye_material(self.recipe.eyes), v, f, uv, weights))
 
     def _build_accessories(self) -> None:
         from scipy.spatial import cKDTree
@@ -291,9 +305,19 @@ class LayeredHuman:
         return surface
 
     def keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
-        """COCO-17 + 6 foot keypoints (23, 3), world metres, from anny's regressor."""
-        T = self._transforms(rotations, root_translation)
-        return self.body.keypoint_weights @ skin(self.body.vertices, self.body.weights, T)
+        """COCO-17 + 6 foot keypoints (23, 3), world metres: anny's regressor, but the eyes are
+        the pupil centres (each eyeball's front pole, rigid to its eye bone)."""
+        A, b = T = self._transforms(rotations, root_translation)
+        kp = self.body.keypoint_weights @ skin(self.body.vertices, self.body.weights, T)
+        names = list(self.body.keypoint_labels)
+        for k, (j, pupil) in enumerate(zip(self.eyes.bones, self.eyes.pupils())):
+            kp[names.index(("left_eye", "right_eye")[k])] = A[j] @ pupil + b[j]
+        return kp
+
+    def gaze(self, rotations=None, root_translation=None) -> np.ndarray:
+        """(2, 3) unit world gaze of the left and right eye: each eye bone's +z."""
+        A, _ = self._transforms(rotations, root_translation)
+        return np.stack([A[j][:, 2] for j in self.eyes.bones])
 
     def add_to(self, scene, rotations=None, root_translation=None, instance: int = 1, prefix: str | None = None):
         """Add (or, when already there, move) every layer in ``scene`` as ``<prefix>_<layer>``."""

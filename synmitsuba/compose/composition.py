@@ -8,6 +8,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from synmitsuba.body.eyes import EYE_BONES, GazeTarget
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
 from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose import cameras as cams
@@ -16,7 +17,7 @@ from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
-from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, clip_bounds
+from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
@@ -118,6 +119,7 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
                           len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
         spec_.build([d.human for d in placed])
         spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
+        _aim_eyes(spec_, rng)
         return spec_
     for shrink in GROUP_SHRINK[:-1]:  # while no camera frames the group, place it tighter
         try:
@@ -203,6 +205,46 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
     for p in placed:
         p.pose_in(scene, 0)
     return views, frames
+
+
+def _aim_eyes(spec_: SceneSpec, rng) -> None:
+    """Draw where each subject looks (drawn after the views: the first view's camera is a
+    target) and turn the built subjects' eyes there."""
+    scene, placed = spec_.build()
+    mid = spec_.n_frames // 2
+    camera = spec_.views[0].cameras[mid].center
+    heads = [p.motion.joint_positions()[mid][[p.motion.skeleton.index(b) for b in EYE_BONES]].mean(0) for p in placed]
+    for i, (s, p) in enumerate(zip(spec_.subjects, placed)):
+        s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:])
+        p.motion = aimed(p.motion, s.gaze)
+        p.pose_in(scene, 0)
+
+
+def _at_camera(rng, camera: np.ndarray, others: list) -> GazeTarget:
+    return GazeTarget("camera", tuple(float(x) for x in camera))
+
+
+def _at_subject(rng, camera: np.ndarray, others: list) -> GazeTarget:
+    if not others:  # alone: the camera instead
+        return _at_camera(rng, camera, others)
+    return GazeTarget("subject", tuple(float(x) for x in others[int(rng.integers(len(others)))]))
+
+
+def _ahead(rng, camera: np.ndarray, others: list) -> GazeTarget:
+    yaw, pitch = np.clip(rng.normal(0, 12), -25, 25), np.clip(rng.normal(-4, 8), -20, 15)
+    return GazeTarget("ahead", None, round(float(yaw), 3), round(float(pitch), 3), round(float(rng.uniform(1.5, 8)), 3))
+
+
+# where subjects look, and how often: the first view's camera, another subject's eyes (at the
+# clip's middle frame), or ahead of the head, turned up to 25 degrees, 1.5-8 m away
+GAZE_DRAWS = {"camera": (0.4, _at_camera), "subject": (0.2, _at_subject), "ahead": (0.4, _ahead)}
+
+
+def draw_gaze(rng: np.random.Generator, camera: np.ndarray, others: list) -> GazeTarget:
+    """A gaze target drawn by ``GAZE_DRAWS``' odds; ``others`` are the other subjects' eyes."""
+    odds = [p for p, _ in GAZE_DRAWS.values()]
+    _, draw = list(GAZE_DRAWS.values())[int(rng.choice(len(odds), p=odds))]
+    return draw(rng, camera, others)
 
 
 def load_compose_config(path: str) -> ComposeConfig:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from synmitsuba.body.eyes import GazeTarget, aim_eyes
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
 from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose.instances import first_subject_instance, scene_instances
@@ -88,18 +89,21 @@ class SubjectSpec:
     frames: np.ndarray     # (F, 4) per-frame ground boxes
     height: float          # tallest point over the clip, metres
     lift: float = 0.0      # metres the clip is raised so its lowest point over the clip is on the ground
+    gaze: GazeTarget | None = None  # where the eyes look (None: straight ahead of the head)
 
     def to_dict(self) -> dict:
+        gaze = {} if self.gaze is None else {"gaze": self.gaze.to_dict()}
         return {"recipe": json.loads(self.recipe.to_json()), "motion": self.motion.to_dict(),
                 "position": [float(v) for v in self.position], "yaw_deg": float(self.yaw_deg),
                 "instance": int(self.instance), "footprint": self.footprint.tolist(),
-                "frames": self.frames.tolist(), "height": float(self.height), "lift": float(self.lift)}
+                "frames": self.frames.tolist(), "height": float(self.height), "lift": float(self.lift), **gaze}
 
     @classmethod
     def from_dict(cls, d: dict) -> "SubjectSpec":
+        gaze = GazeTarget.from_dict(d["gaze"]) if "gaze" in d else None
         return cls(SubjectRecipe.from_dict(d["recipe"]), MotionSpec.from_dict(d["motion"]), tuple(d["position"]),
                    d["yaw_deg"], d["instance"], np.asarray(d["footprint"], float), np.asarray(d["frames"], float),
-                   d["height"], d["lift"])
+                   d["height"], d["lift"], gaze)
 
 
 @dataclass
@@ -145,7 +149,14 @@ def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) ->
     motion = place_motion(retargeted_clip(human, s.motion, f"subjects[{i}].motion"), s.position, s.yaw_deg, s.lift)
     if s.motion.start:
         motion = motion.rolled(s.motion.start)
-    return PlacedSubject(human, motion, 0, s.instance, f"subject{i}")
+    return PlacedSubject(human, aimed(motion, s.gaze), 0, s.instance, f"subject{i}")
+
+
+def aimed(motion: Motion, gaze: GazeTarget | None) -> Motion:
+    """The clip with both eyes turned towards ``gaze`` at every frame (unchanged for None)."""
+    if gaze is None:
+        return motion
+    return replace(motion, rotations=aim_eyes(motion.skeleton, motion.rotations, motion.root_translation, gaze))
 
 
 def clip_bounds(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> tuple[list, float, float]:
