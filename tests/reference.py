@@ -27,3 +27,24 @@ def winding_numbers(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
 def bound_points(binding, body_vertices, body_faces) -> np.ndarray:
     """The bound body points for (possibly posed) body vertices."""
     return np.einsum("nk,nka->na", binding.barycentric, body_vertices[body_faces[binding.triangle]])
+
+
+def point_triangle_distances(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """(N, M) exact distance from each point (N, 3) to each triangle (M, 3, 3): to its plane where
+    the projection falls inside it, else to the nearest of its three edges (brute force)."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    n = np.cross(b - a, c - a)
+    n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    rel = points[:, None] - a[None]                                  # (N, M, 3)
+    h = np.einsum("nmi,mi->nm", rel, n)
+    proj = points[:, None] - h[..., None] * n[None]
+    inside = np.ones(h.shape, bool)
+    for p, q in ((a, b), (b, c), (c, a)):  # same side of every edge as the normal says
+        inside &= np.einsum("nmi,mi->nm", np.cross(q - p, proj - p[None]), n) >= 0
+
+    def segment(p, q):
+        d = q - p
+        s = np.clip(np.einsum("nmi,mi->nm", points[:, None] - p[None], d) / np.einsum("mi,mi->m", d, d), 0, 1)
+        return np.linalg.norm(points[:, None] - (p[None] + s[..., None] * d[None]), axis=2)
+    edges = np.minimum(np.minimum(segment(a, b), segment(b, c)), segment(c, a))
+    return np.where(inside, np.abs(h), edges)

@@ -163,3 +163,41 @@ def test_eyes_rebuild_identically_and_ride_in_the_recipe():
     old = recipe.to_dict()
     del old["eyes"]  # a recipe written before eyes existed reads with the default brown eyes
     assert sm.SubjectRecipe.from_dict(old).eyes.iris == "brown"
+
+
+def test_brows_and_lashes_stay_on_the_skin_in_motion(human):
+    """Every brow hair's and lash's root lies within 1 mm of the posed skin (a brute-force
+    point-triangle distance), no strand point enters an eyeball, and the brows stay above the
+    eyes, in a walk, with the head turned and tipped up."""
+    from reference import point_triangle_distances
+    sk = human.skeleton
+    for rot, root in list(_poses(human))[1::2]:  # a walk frame, the head turn, the head tipped up
+        layers = {lay.name: lay for lay in human.pose(rot, root, resolve=False)}
+        centres, _, body, faces = _posed_eyes(human, rot, root)
+        head = bone_transforms(sk, rot, root)[0][sk.index("head")]
+        for name in ("brows", "lashes"):
+            pts = layers[name].points
+            near = faces[(np.linalg.norm(body[faces] - np.mean(centres, 0), axis=2) < 0.06).all(1)]
+            dist = point_triangle_distances(pts[:, 0], body[near]).min(1)
+            assert dist.max() < 1e-3, (name, dist.max())
+            for c, r in zip(centres, human.eyes.radii):
+                assert (np.linalg.norm(pts - c, axis=2) > r).all(), f"{name} inside an eyeball"
+        up = (layers["brows"].points[:, 0] - np.mean(centres, 0)) @ head[:, 1]
+        assert up.min() > 0.005, up.min()
+
+
+def test_lashes_line_the_lids_and_brows_follow_the_recipe(human):
+    """Lash roots lie within 4 mm of an eyeball (on the lid margins), upper lashes curl upwards;
+    a denser recipe grows more brow hairs."""
+    from dataclasses import replace
+    lashes = human.face_hair["lashes"][0]
+    d = np.min([np.linalg.norm(lashes[:, 0] - c, axis=1) - r for c, r in zip(human.eyes.centres, human.eyes.radii)], 0)
+    assert d.max() < 0.004
+    upper = lashes[:, 0, 1] > human.eyes.centres[:, 1].mean()
+    assert upper.sum() > (~upper).sum() and (lashes[upper, -1, 1] > lashes[upper, 0, 1]).mean() > 0.9
+    from synmitsuba.body.brows import eye_region, grow_brows
+    helpers = np.concatenate(list(helper_vertices().values()))
+    faces = human.body.faces[~np.isin(human.body.faces, helpers).any(1)]
+    eye = eye_region(human.eyes.centres[0], human.eyes.radii[0], 1.0, human.body.vertices, faces)
+    counts = [len(grow_brows(eye, replace(human.recipe.brows, density=d), np.random.default_rng(0))) for d in (0, 1)]
+    assert counts[1] > 2 * counts[0]

@@ -9,6 +9,7 @@ import numpy as np
 
 from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_accessories
 from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES, height_for_stature, measures, shape_calibration
+from synmitsuba.body.brows import BrowParams, sample_brows
 from synmitsuba.body.eyes import EyeParams, sample_eyes
 from synmitsuba.body.garments import GARMENTS, OUTFITS, GarmentParams, sample_garment
 from synmitsuba.body.hair import STYLES, HairParams, sample_hair
@@ -34,6 +35,7 @@ class SubjectRecipe(Params):
     hair: HairParams = spec(factory=HairParams, check=Nested(HairParams))
     accessories: list = spec(factory=list, check=ListOf(Nested(AccessoryParams)))
     eyes: EyeParams = spec(factory=EyeParams, check=Nested(EyeParams), doc="iris colour and pattern (default brown)")
+    brows: BrowParams = spec(factory=BrowParams, check=Nested(BrowParams), doc="eyebrows and eyelashes")
     texture_size: int = spec(1024, Choice(TEXTURE_SIZES), doc="garment texture side (the skin's is twice, at most "
                              "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
 
@@ -183,6 +185,7 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
         accessories = [AccessoryParams(k, sample_lab_colour(rng, (10, 80))) for k in cfg.accessories]
     skin = sample_skin(rng)
     eyes = sample_eyes(rng, skin.ita_deg, hair.melanin)  # drawn last: earlier draws stay as they were
+    brows = sample_brows(rng, pheno["gender"] >= 0.5)
     recipe = SubjectRecipe(phenotypes=pheno, skin=skin, garments=garments, hair=hair, accessories=accessories,
-                           eyes=eyes, texture_size=cfg.texture_size)
+                           eyes=eyes, brows=brows, texture_size=cfg.texture_size)
     return SubjectRecipe.from_dict(json.loads(recipe.to_json()))  # normalised exactly as it will be read back

@@ -12,7 +12,8 @@ import numpy as np
 from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
-from synmitsuba.body.eyes import Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, hide_helpers
+from synmitsuba.body.brows import BROW_RADIUS, LASH_RADIUS, eye_region, grow_brows, grow_lashes, taper
+from synmitsuba.body.eyes import Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
                                       build_garment, garment_offset, metres_per_uv)
@@ -134,6 +135,7 @@ class LayeredHuman:
         for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
             part.inner = clothes[k] and any(clothes[k + 1:])
         self._build_eyes()
+        self._build_brows_and_lashes()
         self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
         self._build_accessories()
@@ -178,6 +180,33 @@ class LayeredHuman:
         weights = np.zeros((len(v), len(self.skeleton)))
         weights[np.arange(len(v)), np.asarray(self.eyes.bones)[side]] = 1.0
         self.parts.append(_Part("eyes", int(Layer.BODY), eye_material(self.recipe.eyes), v, f, uv, weights))
+
+    def _build_brows_and_lashes(self) -> None:
+        """Brow hairs and lashes round both eyes (``body.brows``), each strand skinned rigidly
+        with its root's nearest skin vertex (never an eye helper's: they turn with the eye)."""
+        from scipy import sparse
+        from scipy.spatial import cKDTree
+        body, p = self.body, self.recipe.brows
+        helpers = np.concatenate(list(helper_vertices().values()))
+        faces = body.faces[~np.isin(body.faces, helpers).any(1)]
+        rng = np.random.default_rng([p.seed, 3])
+        grown: dict[str, list] = {"brows": [], "lashes": []}
+        for centre, radius, side in zip(self.eyes.centres, self.eyes.radii, (1.0, -1.0)):
+            eye = eye_region(centre, radius, side, body.vertices, faces)
+            grown["lashes"].append(grow_lashes(eye, p, rng))
+            grown["brows"].append(grow_brows(eye, p, rng))
+        skin_ids = np.setdiff1d(np.arange(len(body.vertices)), helpers)
+        tree = cKDTree(body.vertices[skin_ids])
+        hair = self.recipe.hair
+        melanin = {"brows": min(hair.melanin + 0.1, 1.0), "lashes": max(hair.melanin, 0.85)}
+        self.face_hair: dict[str, tuple] = {}
+        for name, parts in grown.items():
+            pts = np.concatenate(parts)
+            rows = skin_ids[tree.query(pts[:, 0])[1]]
+            weights = sparse.csr_matrix(np.repeat(body.weights[rows], pts.shape[1], axis=0))
+            radius = taper(len(pts), BROW_RADIUS if name == "brows" else LASH_RADIUS)
+            self.face_hair[name] = (pts, weights, radius,
+                                    Material(kind="hair", melanin=melanin[name], redness=float(hair.redness)))
 
     def _build_accessories(self) -> None:
         from scipy.spatial import cKDTree
@@ -260,6 +289,9 @@ class LayeredHuman:
             if (~scalp).any():
                 out.append(PosedLayer("beard", int(Layer.BEARD), hair_material(self.recipe.hair, shade[~scalp]),
                                       points=hair.points[~scalp], radius=hair.radius[~scalp]))
+        for name, (pts, weights, radius, material) in self.face_hair.items():
+            out.append(PosedLayer(name, int(Layer.HAIR), material, radius=radius,
+                                  points=skin(pts.reshape(-1, 3), weights, T).reshape(pts.shape)))
         if len(self._posed) >= 4:  # the current frame and its neighbours
             self._posed.pop(next(iter(self._posed)))
         self._posed[key] = out
