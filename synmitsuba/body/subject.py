@@ -175,11 +175,11 @@ class LayeredHuman:
         self.head_bone = sk.index("head")
 
     def _build_eyes(self) -> None:
-        """Both eyeballs as one part on the body layer, each rigid to its eye bone."""
+        """Both eyeballs as one part on their own layer, each rigid to its eye bone."""
         v, f, uv, side = eyeball_meshes(self.eyes, self.recipe.eyes.iris_deg)
         weights = np.zeros((len(v), len(self.skeleton)))
         weights[np.arange(len(v)), np.asarray(self.eyes.bones)[side]] = 1.0
-        self.parts.append(_Part("eyes", int(Layer.BODY), eye_material(self.recipe.eyes), v, f, uv, weights))
+        self.parts.append(_Part("eyes", int(Layer.EYES), eye_material(self.recipe.eyes), v, f, uv, weights))
 
     def _build_brows_and_lashes(self) -> None:
         """Brow hairs and lashes round both eyes (``body.brows``), each strand skinned rigidly

@@ -11,9 +11,11 @@ import numpy as np
 
 from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, output_file, positive_int, resolution
 
-# layer id -> preview colour (background, body, top, bottom, dress, shoes, hair, beard, accessory, object, ground)
+# layer id -> preview colour (background, body, top, bottom, dress, shoes, hair, beard, accessory, object, ground,
+# eyes)
 LAYER_COLOURS = np.array([[0, 0, 0], [230, 190, 160], [200, 40, 40], [40, 80, 200], [180, 60, 180], [40, 40, 40],
-                          [120, 80, 30], [90, 60, 20], [40, 200, 200], [200, 200, 40], [110, 110, 110]], np.uint8)
+                          [120, 80, 30], [90, 60, 20], [40, 200, 200], [200, 200, 40], [110, 110, 110],
+                          [250, 250, 250]], np.uint8)
 
 
 def _camera(human, angle_deg: float, w: int, h: int):

@@ -14,3 +14,4 @@ class Layer(IntEnum):
     ACCESSORY = 8
     OBJECT = 9      # props and scene objects
     GROUND = 10
+    EYES = 11       # eyeballs (sclera, iris, pupil, cornea)

