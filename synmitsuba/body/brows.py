@@ -83,20 +83,25 @@ def eye_region(centre: np.ndarray, radius: float, side: float, vertices: np.ndar
     return EyeRegion(centre, float(radius), frame, vertices[near])
 
 
-def lid_margin(eye: EyeRegion, count: int = 64, steps: int = 80) -> tuple[np.ndarray, np.ndarray]:
+def lid_margin(eye: EyeRegion, count: int = 64, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """Points (count, 3) round the lids' margin and their azimuth about the forward axis (0
-    outwards, pi/2 up): along each azimuth, where rays from the centre first meet skin."""
+    outwards, pi/2 up): along each azimuth, where rays from the centre first meet skin (the
+    edge of the open cone, bisected between 2 and 50 degrees from the forward axis)."""
     psi = 2 * np.pi * np.arange(count) / count
-    theta = np.radians(np.linspace(2.0, 50.0, steps))
-    P, T = np.meshgrid(psi, theta, indexing="ij")
-    local = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
-    t = ray_distances(eye.centre, local @ eye.frame.T, eye.skin).min(1).reshape(count, steps)
-    covered = t < 0.05
-    first = np.argmax(covered, axis=1)  # the first covered angle per azimuth
-    ok = covered.any(1)
-    k = np.arange(count)[ok]
-    d = local.reshape(count, steps, 3)[k, first[ok]] @ eye.frame.T
-    return eye.centre + d * t[k, first[ok]][:, None], psi[ok]
+    tri = eye.skin[(np.linalg.norm(eye.skin - eye.centre, axis=2) < 0.03).all(1)]  # the lids
+
+    def cast(theta):
+        local = np.stack([np.sin(theta) * np.cos(psi), np.sin(theta) * np.sin(psi), np.cos(theta)], -1)
+        d = local @ eye.frame.T
+        return d, ray_distances(eye.centre, d, tri).min(1)
+    lo, hi = np.full(count, np.radians(2.0)), np.full(count, np.radians(50.0))
+    for _ in range(iterations):
+        mid = (lo + hi) / 2
+        covered = np.isfinite(cast(mid)[1])
+        lo, hi = np.where(covered, lo, mid), np.where(covered, mid, hi)
+    d, t = cast(hi)
+    ok = np.isfinite(t)
+    return eye.centre + d[ok] * t[ok, None], psi[ok]
 
 
 def _along(points: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -186,6 +186,7 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     skin = sample_skin(rng)
     eyes = sample_eyes(rng, skin.ita_deg, hair.melanin)  # drawn last: earlier draws stay as they were
     brows = sample_brows(rng, pheno["gender"] >= 0.5)
+    skin.under_eye, skin.pores = round(float(rng.uniform(0.0, 0.8)), 3), round(float(rng.uniform(0.3, 1.0)), 3)
     recipe = SubjectRecipe(phenotypes=pheno, skin=skin, garments=garments, hair=hair, accessories=accessories,
                            eyes=eyes, brows=brows, texture_size=cfg.texture_size)
     return SubjectRecipe.from_dict(json.loads(recipe.to_json()))  # normalised exactly as it will be read back

