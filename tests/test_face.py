@@ -35,19 +35,18 @@ def _poses(human):
 
 
 def _crossings(origin: np.ndarray, dirs: np.ndarray, tri: np.ndarray, reach: np.ndarray) -> np.ndarray:
-    """How many triangles (M, 3, 3) each ray (N, 3) from ``origin`` crosses before ``reach`` (N,):
-    Moller-Trumbore, written here for the test."""
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    p = np.cross(dirs[:, None], e2[None])
-    det = np.einsum("nmi,mi->nm", p, e1)
-    ok = np.abs(det) > 1e-14
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    s = origin - tri[:, 0]
-    u = np.einsum("nmi,mi->nm", p, s) * inv
-    q = np.cross(s, e1)
-    v = np.einsum("ni,mi->nm", dirs, q) * inv
-    t = np.einsum("mi,mi->m", e2, q)[None] * inv
-    return (ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0) & (t < reach[:, None])).sum(1)
+    """How many triangles (M, 3, 3) each ray (N, 3) from ``origin`` crosses before ``reach`` (N,),
+    written here for the test: the hit on each triangle's plane, kept when it lies on the inner
+    side of all three edges."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    n = np.cross(b - a, c - a)
+    denom = dirs @ n.T                                            # (N, M)
+    t = np.einsum("mi,mi->m", a - origin, n)[None] / np.where(np.abs(denom) > 1e-14, denom, np.nan)
+    hit = origin + t[..., None] * dirs[:, None]                   # (N, M, 3)
+    inside = np.ones(t.shape, bool)
+    for p, q in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("nmi,mi->nm", np.cross(q - p, hit - p), n) >= 0
+    return (inside & (t > 0) & (t < reach[:, None])).sum(1)
 
 
 def _posed_eyes(human, rot, root):
