@@ -47,13 +47,3 @@ def face_weights(vertices: np.ndarray, eyes: np.ndarray, nose: np.ndarray) -> di
         d = np.exp(-((x - c[0]) / 0.013) ** 2 - ((y - (c[1] - 0.015)) / 0.006) ** 2)
         under = np.maximum(under, d * (z > c[2] - 0.004))
     return {"tzone": tzone, "under_eye": under}
-
-
-def paint_weights(weights: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, size: int) -> np.ndarray:
-    """A per-vertex weight (V,) painted over the texture (size, size) in [0, 1], softened."""
-    from synmitsuba.body.textures import paint_uv
-    w = weights[faces]
-    keep = w.max(1) > 0.02
-    img = paint_uv(np.zeros((size, size, 3), np.float32), uv, face_uv[keep], w[keep], (1.0, 1.0, 1.0),
-                   blur=size / 256)
-    return img[..., 0]

@@ -21,9 +21,9 @@ from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.recipe import SubjectRecipe
-from synmitsuba.body.skin_detail import face_weights, paint_weights, pore_repeat
+from synmitsuba.body.skin_detail import face_weights, pore_repeat
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
-                                      skin_material)
+                                      paint_weights, skin_material)
 from synmitsuba.body.topology import split_at_seams, weld
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import SmoothNormals, vertex_normals

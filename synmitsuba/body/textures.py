@@ -403,6 +403,15 @@ def paint_uv(image: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, weight: np.
     return (image * (1 - m) + np.asarray(colour, np.float32) * m).astype(np.float32)
 
 
+def paint_weights(weights: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, size: int) -> np.ndarray:
+    """A per-vertex weight (V,) painted over the texture (size, size) in [0, 1], softened."""
+    w = weights[faces]
+    keep = w.max(1) > 0.02
+    img = paint_uv(np.zeros((size, size, 3), np.float32), uv, face_uv[keep], w[keep], (1.0, 1.0, 1.0),
+                   blur=size / 256)
+    return img[..., 0]
+
+
 SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "tzone": 0.32, "lips": 0.3}  # oilier face and T-zone, moist lips
 
 
