@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.geometry import face_normals
 from synmitsuba.schema import Number, Params, spec
 
 LASH_RADIUS = 0.00007   # metres at the root (a lash is about 0.1-0.15 mm thick), tapering to a third
@@ -172,8 +173,8 @@ def grow_brows(eye: EyeRegion, p: BrowParams, rng: np.random.Generator) -> np.nd
     t = t[np.arange(n), face]
     keep = np.isfinite(t)
     roots, dirs, s, tri = eye.centre + dirs[keep] * t[keep, None], dirs[keep], s[keep], eye.skin[face[keep]]
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normal *= np.sign(np.einsum("ni,ni->n", normal, dirs))[:, None] / np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = face_normals(tri)
+    normal *= np.sign(np.einsum("ni,ni->n", normal, dirs))[:, None]  # facing away from the eye
     y2, p2 = brow_arch(p, np.clip(s + 0.05, 0, 1))
     along = _directions(eye.frame, y2, p2) * t[keep, None] + eye.centre - roots
     up = eye.frame[:, 1]

@@ -144,8 +144,8 @@ def unit_eyeball(iris_deg: float, rings: int = 48, segments: int = 64) -> tuple[
 
 
 def _drop_degenerate(faces: np.ndarray, v: np.ndarray) -> np.ndarray:
-    area = np.linalg.norm(np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]]), axis=1)
-    return faces[area > 1e-12]
+    from synmitsuba.geometry import triangle_areas
+    return faces[triangle_areas(v[faces]) > 1e-12]
 
 
 def eyeball_meshes(eyes: Eyeballs, iris_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -281,24 +281,18 @@ def aim_eyes(skeleton, rotations: np.ndarray, root_translation: np.ndarray, gaze
     from synmitsuba.body.skeleton import forward_kinematics
     rot = np.array(rotations, dtype=np.float64)
     G, pos = forward_kinematics(skeleton, rot, root_translation)
-    for b in EYE_BONES:
-        j = skeleton.index(b)
-        head = G[:, skeleton.parents[j]]                                   # (F, 3, 3)
-        target = _target_points(gaze, head, pos[:, skeleton.index("head")], pos[:, [skeleton.index(e) for e in EYE_BONES]])
-        local = np.einsum("fba,fb->fa", head, target - pos[:, j])           # head^T (target - eye)
-        rot[:, j] = _look(local)
+    eyes = [skeleton.index(b) for b in EYE_BONES]
+    head = G[:, skeleton.parents[eyes[0]]]                                  # (F, 3, 3): both eyes' parent
+    target = _target_points(gaze, head, pos[:, eyes])
+    for j in eyes:
+        rot[:, j] = _look(np.einsum("fba,fb->fa", head, target - pos[:, j]))  # head^T (target - eye)
     return rot
 
 
-def _target_points(gaze: GazeTarget, head: np.ndarray, head_pos: np.ndarray, eyes: np.ndarray) -> np.ndarray:
-    """(F, 3) world target per frame: the fixed point, or ahead of the head between the eyes."""
+def _target_points(gaze: GazeTarget, head: np.ndarray, eyes: np.ndarray) -> np.ndarray:
+    """(F, 3) world target per frame: the fixed point, or ahead of the head from between the eyes (F, 2, 3)."""
     if gaze.point is not None:
-        return np.broadcast_to(np.asarray(gaze.point, dtype=np.float64), head_pos.shape)
+        return np.broadcast_to(np.asarray(gaze.point, dtype=np.float64), (len(head), 3))
     y, p = np.radians(gaze.yaw_deg), np.radians(gaze.pitch_deg)
     d = gaze.distance * np.array([np.cos(p) * np.sin(y), np.sin(p), np.cos(p) * np.cos(y)])
     return eyes.mean(1) + np.einsum("fab,b->fa", head, d)
-
-
-def gaze_directions(skeleton, global_rotations: np.ndarray) -> np.ndarray:
-    """(2, 3) unit world gaze of the left and right eye for one frame's global rotations (J, 3, 3)."""
-    return np.stack([global_rotations[skeleton.index(b)][:, 2] for b in EYE_BONES])
