@@ -17,6 +17,7 @@ from synmitsuba.body.eyes import Eyeballs, eye_material, eyeball_meshes, fit_eye
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
                                       build_garment, garment_offset, metres_per_uv)
+from synmitsuba.body.hand_points import HandPoints, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
@@ -360,6 +361,16 @@ class LayeredHuman:
         for k, (j, pupil) in enumerate(zip(self.eyes.bones, self.eyes.pupils())):
             kp[names.index(("left_eye", "right_eye")[k])] = A[j] @ pupil + b[j]
         return kp
+
+    @functools.cached_property
+    def _hand_points(self) -> HandPoints:
+        return hand_points(self.skeleton, self.body.vertices, self.body.weights)
+
+    def hand_keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
+        """(2, 21, 3) world points of the left and right hand in COCO-WholeBody's order
+        (``body.hand_points``): the wrist, then thumb to pinky from the knuckle to the tip."""
+        T = self._transforms(rotations, root_translation)
+        return self._hand_points.posed(T, self.skeleton.rest_positions, self.body.vertices, self.body.weights)
 
     def gaze(self, rotations=None, root_translation=None) -> np.ndarray:
         """(2, 3) unit world gaze of the left and right eye: each eye bone's +z."""

@@ -17,8 +17,9 @@ from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
-from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds
+from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, draw_hands
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
+from synmitsuba.motion.hands import with_hands
 from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
 
@@ -119,7 +120,7 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
                           len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
         spec_.build([d.human for d in placed])
         spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
-        _aim_eyes(spec_, rng)
+        _direct(spec_, rng)
         return spec_
     for shrink in GROUP_SHRINK[:-1]:  # while no camera frames the group, place it tighter
         try:
@@ -207,16 +208,17 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
     return views, frames
 
 
-def _aim_eyes(spec_: SceneSpec, rng) -> None:
+def _direct(spec_: SceneSpec, rng) -> None:
     """Draw where each subject looks (drawn after the views: the first view's camera is a
-    target) and turn the built subjects' eyes there."""
+    target) and what its hands do, and set the built subjects' eyes and fingers so."""
     scene, placed = spec_.build()
     mid = spec_.n_frames // 2
     camera = spec_.views[0].cameras[mid].center
     heads = [p.motion.joint_positions()[mid][[p.motion.skeleton.index(b) for b in EYE_BONES]].mean(0) for p in placed]
     for i, (s, p) in enumerate(zip(spec_.subjects, placed)):
         s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:])
-        p.motion = aimed(p.motion, s.gaze)
+        s.hands = draw_hands(rng, p.motion)
+        p.motion = aimed(with_hands(p.motion, s.hands), s.gaze)
         p.pose_in(scene, 0)
 
 
