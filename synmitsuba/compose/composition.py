@@ -17,8 +17,9 @@ from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
-from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, draw_hands
+from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, draw_face, draw_hands
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
+from synmitsuba.motion.faces import with_face
 from synmitsuba.motion.hands import with_hands
 from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
@@ -210,15 +211,15 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
 
 def _direct(spec_: SceneSpec, rng) -> None:
     """Draw where each subject looks (drawn after the views: the first view's camera is a
-    target) and what its hands do, and set the built subjects' eyes and fingers so."""
+    target), what its hands and face do, and set the built subjects' eyes, fingers and faces so."""
     scene, placed = spec_.build()
     mid = spec_.n_frames // 2
     camera = spec_.views[0].cameras[mid].center
     heads = [p.motion.joint_positions()[mid][[p.motion.skeleton.index(b) for b in EYE_BONES]].mean(0) for p in placed]
     for i, (s, p) in enumerate(zip(spec_.subjects, placed)):
         s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:])
-        s.hands = draw_hands(rng, p.motion)
-        p.motion = aimed(with_hands(p.motion, s.hands), s.gaze)
+        s.hands, s.face = draw_hands(rng, p.motion), draw_face(rng, p.motion)
+        p.motion = aimed(with_face(with_hands(p.motion, s.hands), s.face), s.gaze)
         p.pose_in(scene, 0)
 
 

@@ -17,6 +17,7 @@ from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose.instances import first_subject_instance, scene_instances
 from synmitsuba.compose.placement import envelope, frame_boxes, frame_hulls
 from synmitsuba.errors import ConfigError
+from synmitsuba.motion.faces import EXPRESSIONS, FaceTrack, fixed_face, sample_face, with_face
 from synmitsuba.motion.hands import BEHAVIOURS, HandKey, HandTrack, sample_hands, with_hands
 from synmitsuba.motion.motion import Motion
 from synmitsuba.motion.sources import check_motion_source
@@ -34,6 +35,8 @@ class SubjectEntry(Params):
     instance: int | None = spec(None, optional(Number(1, 2 ** 31 - 1, integer=True)), doc="default: 100 + index")
     config: SubjectConfig | None = spec(None, optional(Nested(SubjectConfig)), doc="what the sampled subject fixes")
     hands: str = spec("auto", Choice(("auto", *BEHAVIOURS)), doc="both hands' behaviour (auto: drawn for the motion)")
+    expression: str = spec("auto", Choice(("auto", *EXPRESSIONS)), doc="the face's expression (auto: drawn for the "
+                           "motion, with blinks)")
 
     def check_files(self, where: str, base: str) -> None:
         """Fail now (before any subject is built) on a bad motion or a missing file."""
@@ -93,11 +96,14 @@ class SubjectSpec:
     lift: float = 0.0      # metres the clip is raised so its lowest point over the clip is on the ground
     gaze: GazeTarget | None = None  # where the eyes look (None: straight ahead of the head)
     hands: HandTrack | None = None  # what the fingers do (None: the source's fingers, or anny's rest)
+    face: FaceTrack | None = None   # expressions, speech and blinks (None: anny's neutral face)
 
     def to_dict(self) -> dict:
         gaze = {} if self.gaze is None else {"gaze": self.gaze.to_dict()}
         if self.hands is not None:
             gaze["hands"] = self.hands.to_dict()
+        if self.face is not None:
+            gaze["face"] = self.face.to_dict()
         return {"recipe": json.loads(self.recipe.to_json()), "motion": self.motion.to_dict(),
                 "position": [float(v) for v in self.position], "yaw_deg": float(self.yaw_deg),
                 "instance": int(self.instance), "footprint": self.footprint.tolist(),
@@ -107,9 +113,10 @@ class SubjectSpec:
     def from_dict(cls, d: dict) -> "SubjectSpec":
         gaze = GazeTarget.from_dict(d["gaze"]) if "gaze" in d else None
         hands = HandTrack.from_dict(d["hands"]) if "hands" in d else None
+        face = FaceTrack.from_dict(d["face"]) if "face" in d else None
         return cls(SubjectRecipe.from_dict(d["recipe"]), MotionSpec.from_dict(d["motion"]), tuple(d["position"]),
                    d["yaw_deg"], d["instance"], np.asarray(d["footprint"], float), np.asarray(d["frames"], float),
-                   d["height"], d["lift"], gaze, hands)
+                   d["height"], d["lift"], gaze, hands, face)
 
 
 @dataclass
@@ -126,12 +133,14 @@ class PlacedSubject:
     def pose_in(self, scene, frame: int | None = None) -> None:
         """Pose the subject at ``frame`` (default its own) in ``scene``, moving it in place."""
         f = self.frame if frame is None else int(frame) % self.motion.n_frames
-        self.human.add_to(scene, *self.motion.frame(f), instance=self.instance, prefix=self.prefix)
+        self.human.add_to(scene, *self.motion.frame(f), instance=self.instance, prefix=self.prefix,
+                          face=self.motion.face_at(f))
 
     def pose_at(self, scene, time: float) -> None:
         """Pose the subject at fractional frame ``time`` (a motion-blur sub-frame; clamped to
         the clip), moving it in place."""
-        self.human.add_to(scene, *self.motion.at(time), instance=self.instance, prefix=self.prefix)
+        self.human.add_to(scene, *self.motion.at(time), instance=self.instance, prefix=self.prefix,
+                          face=self.motion.face_at(time))
 
 
 def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) -> Motion:
@@ -150,18 +159,25 @@ def retargeted_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motio
 
 def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) -> PlacedSubject:
     """Subject ``i`` of a scene: built from its recipe (or ``human``, built from it already),
-    its clip retargeted, placed, started at ``s.motion.start``, its hands and eyes set."""
+    its clip retargeted, placed, started at ``s.motion.start``, its hands, face and eyes set."""
     human = build_subject(s.recipe) if human is None else human
     motion = place_motion(retargeted_clip(human, s.motion, f"subjects[{i}].motion"), s.position, s.yaw_deg, s.lift)
     if s.motion.start:
         motion = motion.rolled(s.motion.start)
-    return PlacedSubject(human, aimed(with_hands(motion, s.hands), s.gaze), 0, s.instance, f"subject{i}")
+    motion = with_face(with_hands(motion, s.hands), s.face)
+    return PlacedSubject(human, aimed(motion, s.gaze), 0, s.instance, f"subject{i}")
 
 
 def draw_hands(rng: np.random.Generator, motion: Motion) -> HandTrack:
     """A hand track for a clip, coupled to its kind (its first label) and its parameters."""
     kind = motion.labels[0] if motion.labels else ""
     return sample_hands(rng, kind, motion.meta.get("params"), motion.duration)
+
+
+def draw_face(rng: np.random.Generator, motion: Motion) -> FaceTrack:
+    """A face track for a clip, coupled to its kind (its first label) and its parameters."""
+    kind = motion.labels[0] if motion.labels else ""
+    return sample_face(rng, kind, motion.meta.get("params"), motion.duration)
 
 
 def fixed_hands(behaviour: str, seed: int) -> HandTrack:
@@ -218,15 +234,18 @@ def subject_specs(entries: list, rng: np.random.Generator, taken: set[int], base
         start = (len(hulls) // 2 if e.frame is None else e.frame) % len(hulls)
         position, yaw = (float(e.position[0]), float(e.position[-1])), float(e.yaw_deg)
         frames = np.roll(frame_boxes(hulls, yaw, position), -start, 0)
-        hands = fixed_hands(e.hands, mseed) if e.hands != "auto" else \
-            draw_hands(np.random.default_rng([mseed, HAND_STREAM]), motion.clip(f"{where}[{i}].motion"))
+        clip_ = motion.clip(f"{where}[{i}].motion") if "auto" in (e.hands, e.expression) else None
+        hands = fixed_hands(e.hands, mseed) if clip_ is None or e.hands != "auto" else \
+            draw_hands(np.random.default_rng([mseed, HAND_STREAM]), clip_)
+        face = fixed_face(e.expression, mseed) if clip_ is None or e.expression != "auto" else \
+            draw_face(np.random.default_rng([mseed, FACE_STREAM]), clip_)
         specs.append(SubjectSpec(recipe, replace(motion, start=start), position, yaw, ids[i], envelope(frames), frames,
-                                 height, lift, hands=hands))
+                                 height, lift, hands=hands, face=face))
         humans.append(human)
     return specs, humans
 
 
-HAND_STREAM = 7  # a scene file subject's hands: drawn from (its motion seed, this), not from the scene's rng
+HAND_STREAM, FACE_STREAM = 7, 8  # a scene file subject's hands and face: drawn from (its motion seed, these)
 
 
 def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str = "subjects") -> list[PlacedSubject]:

@@ -18,6 +18,8 @@ import numpy as np
 
 from synmitsuba.annotate.labels import SubjectLabels
 from synmitsuba.body.anny_model import KEYPOINTS
+from synmitsuba.body.expressions import FACE_UNITS
+from synmitsuba.body.hand_points import hand_keypoint_names
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.files import atomic_path
 from synmitsuba.io.preview import to_srgb8, write_png
@@ -76,6 +78,8 @@ def _sidecar(sample: Sample) -> dict:
             "subjects": [_plain({k: v for k, v in r.items() if k != "amodal_mask"}) for r in sample.subjects]}
     if sample.subjects:  # what each row of the keypoint arrays is
         side["keypoint_names"] = list(KEYPOINTS)
+        side["hand_keypoint_names"] = [list(hand_keypoint_names(s)) for s in ("left", "right")]
+        side["expression_names"] = list(FACE_UNITS)
     return side
 
 

@@ -92,7 +92,8 @@ def _log_world(rr, rec, s, bodies: dict, frame: int) -> None:
                 rr.Points3D(np.asarray(r["keypoints3d_world"]), colors=[VIS_COLOURS[int(v)] for v in vis], radii=0.02))
     for instance, (human, motion) in bodies.items():
         rot, root = motion.frame(frame % motion.n_frames)
-        body = next(layer for layer in human.pose(rot, root) if layer.name == "body")
+        face = motion.face_at(frame % motion.n_frames)
+        body = next(layer for layer in human.pose(rot, root, face=face) if layer.name == "body")
         rec.log(f"world/subjects/{instance}/body", rr.Mesh3D(vertex_positions=body.vertices, triangle_indices=body.faces,
                                                              albedo_factor=[0.8, 0.7, 0.6]))
 

@@ -16,6 +16,7 @@ class Motion:
 
     rotations        (F, J, 3, 3) local rotations (skeleton convention: axis-aligned rest frames)
     root_translation (F, 3)       added to the root's rest position
+    face             (F, 52) or None: ARKit face unit weights (``body.expressions.FACE_UNITS``)
     """
 
     skeleton: Skeleton
@@ -25,6 +26,7 @@ class Motion:
     labels: tuple[str, ...] = ()
     source: str = ""
     meta: dict = field(default_factory=dict)
+    face: np.ndarray | None = None
 
     def __post_init__(self):
         self.rotations = np.asarray(self.rotations, dtype=np.float64)
@@ -36,6 +38,10 @@ class Motion:
             raise ConfigError("motion.root_translation", f"array{self.root_translation.shape}", f"expected ({F}, 3)")
         if not (isinstance(self.fps, (int, float)) and self.fps > 0):
             raise ConfigError("motion.fps", self.fps, "give a positive frame rate")
+        if self.face is not None:
+            self.face = np.asarray(self.face, dtype=np.float64)
+            if self.face.ndim != 2 or len(self.face) != F:
+                raise ConfigError("motion.face", f"array{self.face.shape}", f"expected ({F}, units)")
         self.labels = tuple(self.labels)
 
     @property
@@ -62,7 +68,8 @@ class Motion:
             raise ConfigError("clip", (start_s, seconds),
                               f"the window must lie inside the motion (0 .. {self.duration:.3f} s)")
         sl = slice(first, first + count)
-        return replace(self, rotations=self.rotations[sl].copy(), root_translation=self.root_translation[sl].copy())
+        return replace(self, rotations=self.rotations[sl].copy(), root_translation=self.root_translation[sl].copy(),
+                       face=None if self.face is None else self.face[sl].copy())
 
     def resample(self, fps: float) -> "Motion":
         """Resample to ``fps``: slerp for rotations, linear for the root; keeps the time span."""
@@ -72,8 +79,11 @@ class Motion:
             return self
         n = max(1, int(np.floor((self.n_frames - 1) * fps / self.fps + 1e-9)) + 1)
         t = np.arange(n) * self.fps / fps  # fractional source frame index
-        root = np.stack([np.interp(t, np.arange(self.n_frames), c) for c in self.root_translation.T], 1)
-        return replace(self, rotations=slerp_matrices(self.rotations, t), root_translation=root, fps=float(fps))
+
+        def lerp(a):
+            return np.stack([np.interp(t, np.arange(self.n_frames), c) for c in a.T], 1)
+        return replace(self, rotations=slerp_matrices(self.rotations, t), root_translation=lerp(self.root_translation),
+                       fps=float(fps), face=None if self.face is None else lerp(self.face))
 
     def moved(self, yaw_deg: float = 0.0, translation=(0.0, 0.0, 0.0)) -> "Motion":
         """The motion turned by ``yaw_deg`` about the vertical axis through the origin, then
@@ -89,7 +99,8 @@ class Motion:
     def rolled(self, start: int) -> "Motion":
         """The clip started at frame ``start`` and wrapped round (frame 0 is old frame ``start``)."""
         k = int(start) % self.n_frames
-        return replace(self, rotations=np.roll(self.rotations, -k, 0), root_translation=np.roll(self.root_translation, -k, 0))
+        return replace(self, rotations=np.roll(self.rotations, -k, 0), root_translation=np.roll(self.root_translation, -k, 0),
+                       face=None if self.face is None else np.roll(self.face, -k, 0))
 
     def frame(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """(rotations (J, 3, 3), root_translation (3,)) of frame i."""
@@ -107,3 +118,13 @@ class Motion:
         r0, r1 = Rotation.from_matrix(self.rotations[i]), Rotation.from_matrix(self.rotations[i + 1])
         rot = (r0 * Rotation.from_rotvec((r0.inv() * r1).as_rotvec() * a)).as_matrix()  # slerp, every joint at once
         return rot, (1 - a) * self.root_translation[i] + a * self.root_translation[i + 1]
+
+    def face_at(self, time: float) -> np.ndarray | None:
+        """Face unit weights at fractional frame ``time`` (clamped, linear between frames);
+        None when the clip has no face track."""
+        if self.face is None:
+            return None
+        t = float(np.clip(time, 0, self.n_frames - 1))
+        i = min(int(np.floor(t)), self.n_frames - 2) if self.n_frames > 1 else 0
+        a = t - i
+        return self.face[i] if a == 0 else (1 - a) * self.face[i] + a * self.face[i + 1]
