@@ -329,3 +329,42 @@ def test_rays_pass_through_everything_but_the_shapes_asked_for(sm):
     assert (short["instance"] == 0).all() and np.isinf(short["t"]).all() and (short["shape"] == -1).all()
     front = hits_through(scene, o, d, ["front", "target"])
     assert (front["instance"] == 1).all() and np.allclose(front["t"], 5.0, atol=1e-5)
+
+
+def test_hand_points_and_expression_in_records(sm, walker, tmp_path):
+    """Both hands' points are the posed hand keypoints, projected by the pinhole formula; a
+    card in front of the left hand hides its points behind an object and none of the right
+    hand's; the record's expression is the clip's face weights at the frame, through the files."""
+    from dataclasses import replace
+
+    from synmitsuba.annotate import Annotator
+    from synmitsuba.motion.faces import fixed_face, with_face
+    from synmitsuba.motion.hands import HandKey, HandTrack, with_hands
+    hands = HandTrack([HandKey(0.0, "fist", 1)], [HandKey(0.0, "open", 2)])
+    subject = replace(walker, motion=with_face(with_hands(walker.motion, hands), fixed_face("smile", 3)))
+    rot, root = subject.motion.frame(3)
+    pts = subject.human.hand_keypoints(rot, root)
+    centre = pts.reshape(-1, 3).mean(0)
+    eye = centre + [0.0, 0.3, 3.0]
+    cam = sm.Camera.look_at(eye=tuple(eye), target=tuple(centre), fov_y_deg=40, width=96, height=96)
+    scene = sm.Scene()
+    scene.set_environment(sm.Constant(1.0))
+    subject.pose_in(scene, 3)
+    left = pts[0].mean(0)
+    near = left + 0.25 * (eye - left) / np.linalg.norm(eye - left)  # a card 25 cm in front of the left hand
+    card = near + np.array([[-0.08, -0.08, 0], [0.08, -0.08, 0], [0.08, 0.08, 0], [-0.08, 0.08, 0]])
+    scene.add_mesh("card", card, np.array([[0, 1, 2], [0, 2, 3]]), instance=7)
+    sample = sm.render(scene, cam, spp=1)
+    rec = Annotator([subject]).annotate(sample, scene, 3)[0]
+    assert np.allclose(rec["hands3d_world"], pts)
+    K, X = cam.K, rec["hands3d_cam"]
+    assert np.allclose(rec["hands2d"][..., 0], K[0, 0] * X[..., 0] / X[..., 2] + K[0, 2])
+    assert np.allclose(rec["hands2d"][..., 1], K[1, 1] * X[..., 1] / X[..., 2] + K[1, 2])
+    vis = rec["hands_visibility"]
+    assert (vis[0] == 4).sum() >= 18 and not (vis[1] == 4).any() and (vis[1] == 1).sum() >= 8
+    assert np.array_equal(rec["expression"], subject.motion.face[3]) and rec["expression"].max() > 0.3
+    sm.write_sample(sample, tmp_path / "s")
+    back = sm.read_sample(tmp_path / "s").subjects[0]
+    assert np.array_equal(back["expression"], rec["expression"]) and np.array_equal(back["hands2d"], rec["hands2d"])
+    side = json.loads((tmp_path / "s.json").read_text())
+    assert side["expression_names"][24] == "jawOpen" and side["hand_keypoint_names"][1][8] == "right_forefinger4"

@@ -176,3 +176,32 @@ def test_scene_file_subjects_take_a_behaviour_or_draw_one():
     assert fixed_hands("thumbs_up", 0).left[0].behaviour == "thumbs_up"
     waving = specs[1].hands
     assert "open" in [waving.left[0].behaviour, waving.right[0].behaviour]
+
+
+def test_amass_fingers_drive_annys_fingers(human, tmp_path):
+    """Each of an AMASS clip's 30 finger rotations reaches its anny finger bone turned by the
+    same angle (retargeting only re-expresses it in anny's hand frame); the clip then keeps its
+    own fingers, and a clip with flat hands takes the drawn behaviour instead."""
+    from scipy.spatial.transform import Rotation
+
+    from synmitsuba.body.smplx_model import SMPLX_JOINT_NAMES
+    from synmitsuba.motion.names import finger_pairs
+    F = 6
+    rng = np.random.default_rng(2)
+    common = dict(root_orient=np.tile([np.pi / 2, 0, 0], (F, 1)), pose_body=np.zeros((F, 63)), pose_jaw=np.zeros((F, 3)),
+                  trans=np.tile([0.0, 0.0, 0.95], (F, 1)), betas=np.zeros(16), mocap_frame_rate=np.array(30.0))
+    hand = rng.normal(0, 0.4, (F, 90))
+    np.savez(tmp_path / "hands.npz", pose_hand=hand, **common)
+    np.savez(tmp_path / "flat.npz", pose_hand=np.zeros((F, 90)), **common)
+    m = sm.retarget(sm.load_amass(tmp_path / "hands.npz"), human.skeleton)
+    pairs = finger_pairs(SMPLX_JOINT_NAMES, human.skeleton.names)
+    assert len(pairs) == 30 and m.meta["fingers"]
+    for anny, smplx in pairs.items():
+        k = SMPLX_JOINT_NAMES.index(smplx) - 25  # pose_hand: left hand's 15 joints, then the right's
+        source = np.linalg.norm(hand[:, 3 * k:3 * k + 3], axis=1)
+        ours = np.linalg.norm(Rotation.from_matrix(m.rotations[:, human.skeleton.index(anny)]).as_rotvec(), axis=1)
+        np.testing.assert_allclose(ours, source, atol=1e-9)
+    assert H.with_hands(m, draw_hands(np.random.default_rng(0), m)) is m
+    flat = sm.retarget(sm.load_amass(tmp_path / "flat.npz"), human.skeleton)
+    assert not flat.meta["fingers"]
+    assert H.with_hands(flat, draw_hands(np.random.default_rng(0), flat)) is not flat

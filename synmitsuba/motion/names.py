@@ -76,6 +76,14 @@ _ANNY_EXTRA.update({"left_eye_smplhf": "eye.L", "right_eye_smplhf": "eye.R", "le
                     "right_hand": "finger3-1.R"})
 
 
+def finger_pairs(source_names, target_names) -> dict[str, str]:
+    """{anny finger bone: SMPL-X finger joint} for a SMPL-X source (AMASS) and an anny target:
+    the 30 finger joints ``retarget`` carries over besides the canonical ones."""
+    src, tgt = set(source_names), set(target_names)
+    return {anny: smplx for smplx, anny in _ANNY_EXTRA.items()
+            if anny.startswith("finger") and not smplx.endswith("_hand") and smplx in src and anny in tgt}
+
+
 def body_model_to_anny(names) -> dict[str, str]:
     """{SMPL / SMPL-X joint name: anny bone} for every joint with a counterpart: the body through
     the canonical names (as retargeting maps them), hands and eyes through their own table."""

@@ -8,7 +8,9 @@ bone then takes its source bone's rotation relative to the T-pose,
 which equals the paper's R^_i(0) R^_src(t) R^_src(0)^-1 whenever R^_i(0) is the identity (a
 target whose rest pose is the T-pose, as in our Skeleton convention), and otherwise is the order
 that keeps bone directions equal between source and target. Root translation is scaled by the
-ratio of pelvis heights, T(t) = H_pelvis / H_pelvis_src * T_src(t).
+ratio of pelvis heights, T(t) = H_pelvis / H_pelvis_src * T_src(t). A SMPL-X source (AMASS)
+also hands its 30 finger joints to anny's finger bones (``names.finger_pairs``), rest to rest;
+``meta["fingers"]`` says whether it moved any, so drawn hand behaviours leave them alone.
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import align_vectors
 from synmitsuba.motion.humanoid import humanoid_skeleton
 from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.names import BONE_CHILD, canonical_map
+from synmitsuba.motion.names import BONE_CHILD, canonical_map, finger_pairs
 
 
 def _descendant(sk: Skeleton, i: int, j: int) -> bool:
@@ -87,7 +89,14 @@ def _pairs(src: Skeleton, tgt: Skeleton, name_map: dict | None) -> dict[int, int
     if len(pairs) < 6:
         raise ConfigError("name_map", None, "could not match the skeletons' joint names (found "
                           f"{len(pairs)} pairs); pass name_map={{source joint: target joint}}")
+    pairs.update({tgt.index(t): src.index(s) for t, s in finger_pairs(src.names, tgt.names).items()})
     return pairs
+
+
+def _moves_fingers(motion: Motion, target: Skeleton) -> bool:
+    """Whether the source turns any finger joint it hands over to the target's fingers."""
+    joints = [motion.skeleton.index(s) for s in finger_pairs(motion.skeleton.names, target.names).values()]
+    return bool(joints) and not np.allclose(motion.rotations[:, joints], np.eye(3), atol=1e-9)
 
 
 def retarget(motion: Motion, target: Skeleton, name_map: dict | None = None) -> Motion:
@@ -122,4 +131,5 @@ def retarget(motion: Motion, target: Skeleton, name_map: dict | None = None) -> 
         motion.joint_positions()[:, s_root]
     root = ratio * world_root - target.rest_positions[0]
     return replace(motion, skeleton=target, rotations=R, root_translation=root,
-                   meta={**motion.meta, "retargeted_from": list(src.names[:3]), "pelvis_ratio": ratio})
+                   meta={**motion.meta, "retargeted_from": list(src.names[:3]), "pelvis_ratio": ratio,
+                         "fingers": _moves_fingers(motion, target)})
