@@ -155,6 +155,32 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
             ev.accumulate()
             ev.summarize()
             assert ev.stats[0] == pytest.approx(1.0), iou
+        # COCO-WholeBody's per-part evaluation, as its code does it: each part's points in place of
+        # "keypoints" with its own sigmas, over the annotations where the part is valid
+        doc = json.loads(out.read_text())
+        for part in ("lefthand", "righthand"):
+            anns = [{**a, "keypoints": a[f"{part}_kpts"], "num_keypoints": sum(v > 0 for v in a[f"{part}_kpts"][2::3])}
+                    for a in doc["annotations"] if a[f"{part}_valid"]]
+            assert anns, part
+            part_gt = COCO()
+            part_gt.dataset = {**doc, "annotations": anns}
+            part_gt.createIndex()
+            ev = COCOeval(part_gt, part_gt.loadRes([{**a, "score": 1.0} for a in anns]), "keypoints")
+            ev.params.kpt_oks_sigmas = np.full(21, 0.025)
+            ev.evaluate()
+            ev.accumulate()
+            ev.summarize()
+            assert ev.stats[0] == pytest.approx(1.0), part
+    for a in doc["annotations"]:
+        rec = next(r for r in sm.read_sample(data / f"view{a['image_id'] - 1}").subjects if r["instance"] == a["instance"])
+        assert len(a["keypoints"] + a["foot_kpts"] + a["face_kpts"] + a["lefthand_kpts"] + a["righthand_kpts"]) == 133 * 3
+        for side, part in enumerate(("lefthand", "righthand")):
+            k = np.reshape(a[f"{part}_kpts"], (21, 3))
+            seen = rec["hands_visibility"][side] > 0
+            assert np.array_equal(k[:, 2] > 0, seen) and np.allclose(k[seen, :2], rec["hands2d"][side][seen])
+            x, y, w, h = a[f"{part}_box"]
+            assert ((k[seen, 0] >= x) & (k[seen, 0] <= x + w) & (k[seen, 1] >= y) & (k[seen, 1] <= y + h)).all()
+            assert a[f"{part}_valid"] == bool((rec["hands_visibility"][side] == 1).any())
     sm.export_coco(str(data), str(tmp_path / "index.json"), keypoint_coords="pixel_index")
     index = json.loads((tmp_path / "index.json").read_text())
     assert index["info"]["keypoint_coords"] == "pixel_index"

@@ -6,6 +6,11 @@ v = 2 visible, 1 in the image but occluded (by itself, a subject or an object), 
 (x = y = 0); the 6 foot points in ``foot_kpts`` (COCO-WholeBody order); the visible mask as
 uncompressed RLE (column-major runs, starting with background); its area and tight box
 [x, y, w, h]; the amodal box in ``bbox_amodal``. ``pycocotools`` reads and evaluates the file.
+COCO-WholeBody's fields come with it: ``lefthand_kpts`` / ``righthand_kpts`` (21 x 3, its order),
+``lefthand_box`` / ``righthand_box`` (the hand's points in the image, padded by ``HAND_PAD`` of the
+larger side, [x, y, w, h]; zeros when none) and ``*_valid`` (some point of that hand visible);
+``face_kpts`` (68 x 3) and ``face_box`` are written unlabelled (v = 0, ``face_valid`` false)
+until the face's 68 points exist, so WholeBody loaders read the file and ignore the face.
 
 Keypoint coordinates: ``"continuous"`` (default, as in every sample: pixel (0, 0) spans
 [0, 1) x [0, 1), so a pixel's centre is at +0.5) or ``"pixel_index"`` (0.5 less: the centre of
@@ -54,6 +59,30 @@ def _keypoints(rec: dict, first: int, count: int, shift: float = 0.0) -> list:
     return out
 
 
+HAND_PAD = 0.1  # a hand box: its points' box grown by this share of its larger side on every side
+FACE_POINTS = 68
+
+
+def _hand(rec: dict, side: int, shift: float, width: int, height: int) -> dict:
+    """One hand's COCO-WholeBody fields from a record's ``hands2d`` / ``hands_visibility``."""
+    name = ("lefthand", "righthand")[side]
+    if "hands2d" not in rec or len(rec["hands2d"]) == 0:  # a sample written before hand labels
+        return {f"{name}_kpts": [0.0, 0.0, 0] * 21, f"{name}_box": [0.0, 0.0, 0.0, 0.0], f"{name}_valid": False}
+    pts, classes = np.asarray(rec["hands2d"])[side], np.asarray(rec["hands_visibility"])[side]
+    flags = coco_flags(classes)
+    kpts: list = []
+    for (x, y), flag in zip(pts, flags):
+        kpts += [float(x) + shift, float(y) + shift, int(flag)] if flag else [0.0, 0.0, 0]
+    inside = pts[classes > 0]
+    box = [0.0, 0.0, 0.0, 0.0]
+    if len(inside):
+        lo, hi = inside.min(0), inside.max(0)
+        pad = HAND_PAD * float((hi - lo).max())
+        lo, hi = np.maximum(lo - pad, 0), np.minimum(hi + pad, [width, height])
+        box = [float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1])]
+    return {f"{name}_kpts": kpts, f"{name}_box": box, f"{name}_valid": bool((classes == 1).any())}
+
+
 def _xywh(box: list | None) -> list | None:
     """A ``[x_min, y_min, x_max, y_max]`` box as COCO writes boxes, ``[x, y, w, h]``."""
     return None if box is None else [box[0], box[1], box[2] - box[0], box[3] - box[1]]
@@ -69,7 +98,10 @@ def _annotation(rec: dict, sample, image_id: int, ann_id: int, shift: float) -> 
             "area": float(visible.sum()), "bbox": _xywh(box),
             "keypoints": kps, "num_keypoints": int(sum(1 for v in kps[2::3] if v > 0)),
             "foot_kpts": _keypoints(rec, 17, 6, shift), "bbox_amodal": _xywh(rec["bbox_amodal"]), "instance": rec["instance"],
-            "visible_fraction": rec["visible_fraction"]}
+            "visible_fraction": rec["visible_fraction"],
+            "face_kpts": [0.0, 0.0, 0] * FACE_POINTS, "face_box": [0.0, 0.0, 0.0, 0.0], "face_valid": False,
+            **_hand(rec, 0, shift, sample.camera.width, sample.camera.height),
+            **_hand(rec, 1, shift, sample.camera.width, sample.camera.height)}
 
 
 def export_coco(dataset_dir: str, out_json: str, keypoint_coords: str = "continuous") -> dict:
