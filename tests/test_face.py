@@ -102,6 +102,52 @@ def test_gaze_beyond_the_eyes_range_stops_at_its_edge(human):
     assert (yaw > 25).all()
 
 
+def test_glances_jump_off_the_target_and_back(human):
+    """A gaze with a glance 10 deg to the left from 0.5 s and back at 1.0 s: at 0.3 s and 1.3 s the
+    eyes are on the target, at 0.8 s turned 10 deg left of it (the saccade takes 40 ms)."""
+    sk = human.skeleton
+    F = 45
+    rot = np.broadcast_to(np.eye(3), (F, len(sk), 3, 3)).copy()
+    gaze = GazeTarget("ahead", None, 0.0, 0.0, 3.0, shifts=((0.5, 10.0, 0.0), (1.0, 0.0, 0.0)))
+    rot_g = aim_eyes(sk, rot, np.zeros((F, 3)), gaze, fps=30)
+    plain = aim_eyes(sk, rot, np.zeros((F, 3)), GazeTarget("ahead", None, 0.0, 0.0, 3.0), fps=30)
+    for f, expected in ((9, 0.0), (24, 10.0), (39, 0.0)):
+        for j in (sk.index("eye.L"), sk.index("eye.R")):
+            a, b = rot_g[f, j][:, 2], plain[f, j][:, 2]
+            turn = np.degrees(np.arctan2(a[0], a[2]) - np.arctan2(b[0], b[2]))
+            assert turn == pytest.approx(expected, abs=0.05), (f, j)
+    assert GazeTarget.from_dict(gaze.to_dict()) == gaze
+
+
+def test_lids_follow_the_eyes_and_leave_the_pupil_open(human):
+    """Aimed clips set the ARKit eyeLook units from the eyes' turn: looking down lowers the upper
+    lids (eyeLookDown), up raises them, and at the edges of the eyes' range the ray through each
+    pupil still meets no skin within 5 cm."""
+    from synmitsuba.compose.subjects import MotionSpec, aimed, retargeted_clip
+    from synmitsuba.body.expressions import FACE_UNITS
+    clip = retargeted_clip(human, MotionSpec("idle", 1, 0.2, 10))
+    for yaw, pitch, units in ((0, -40, ("eyeLookDownLeft", "eyeLookDownRight")),
+                              (0, 40, ("eyeLookUpLeft", "eyeLookUpRight")),
+                              (60, 0, ("eyeLookOutLeft", "eyeLookInRight")),  # to the subject's left
+                              (-60, -40, ("eyeLookInLeft", "eyeLookOutRight", "eyeLookDownLeft"))):
+        m = aimed(clip, GazeTarget("ahead", None, yaw, pitch, 3.0))
+        for unit in units:
+            assert m.face[0, FACE_UNITS.index(unit)] > 0.15, unit
+        w = dict(zip(FACE_UNITS, m.face[0]))
+        assert (w["eyeLookUpLeft"] == 0 or pitch > 0) and (w["eyeLookOutLeft"] == 0) == (yaw <= 0)
+        rot, root = m.frame(0)
+        layers = {lay.name: lay for lay in human.pose(rot, root, face=m.face[0], resolve=False)}
+        body = layers["body"]
+        helpers = np.isin(human.split.source, np.concatenate(list(helper_vertices().values())))
+        faces = body.faces[~helpers[body.faces].any(1)]
+        A, b = bone_transforms(human.skeleton, rot, root)
+        for k, (j, c) in enumerate(zip(human.eyes.bones, human.eyes.centres)):
+            centre = A[j] @ c + b[j]
+            tri = body.vertices[faces[(np.linalg.norm(body.vertices[faces] - centre, axis=2) < 0.05).all(1)]]
+            forward = human.gaze(rot, root)[k]
+            assert _crossings(centre, forward[None], tri, np.array([0.05]))[0] == 0, (yaw, pitch, k)
+
+
 def test_pupils_are_where_the_eye_keypoints_project(human, sm):
     """In a 512-px frontal close-up, the centroid of the darkest albedo (the pupil: 0.004)
     near each eye keypoint lies within a pixel of the keypoint's projection."""

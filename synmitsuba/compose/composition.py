@@ -217,7 +217,7 @@ def _direct(spec_: SceneSpec, rng) -> None:
     camera = spec_.views[0].cameras[mid].center
     heads = [p.motion.joint_positions()[mid][[p.motion.skeleton.index(b) for b in EYE_BONES]].mean(0) for p in placed]
     for i, (s, p) in enumerate(zip(spec_.subjects, placed)):
-        s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:])
+        s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:], p.motion.duration)
         s.hands, s.face = draw_hands(rng, p.motion), draw_face(rng, p.motion)
         p.motion = aimed(with_face(with_hands(p.motion, s.hands), s.face), s.gaze)
         p.pose_in(scene, 0)
@@ -243,11 +243,31 @@ def _ahead(rng, camera: np.ndarray, others: list) -> GazeTarget:
 GAZE_DRAWS = {"camera": (0.4, _at_camera), "subject": (0.2, _at_subject), "ahead": (0.4, _ahead)}
 
 
-def draw_gaze(rng: np.random.Generator, camera: np.ndarray, others: list) -> GazeTarget:
-    """A gaze target drawn by ``GAZE_DRAWS``' odds; ``others`` are the other subjects' eyes."""
+def draw_gaze(rng: np.random.Generator, camera: np.ndarray, others: list, seconds: float = 2.0) -> GazeTarget:
+    """A gaze target drawn by ``GAZE_DRAWS``' odds (``others`` are the other subjects' eyes),
+    with glances away and back over a clip of ``seconds`` (``draw_glances``)."""
     odds = [p for p, _ in GAZE_DRAWS.values()]
     _, draw = list(GAZE_DRAWS.values())[int(rng.choice(len(odds), p=odds))]
-    return draw(rng, camera, others)
+    return replace(draw(rng, camera, others), shifts=draw_glances(rng, seconds))
+
+
+FIXATION_S = (0.4, 2.5)  # how long the eyes rest on a point between saccades
+GLANCE_ODDS = 0.35       # a fixation off the target (else back on it)
+
+
+def draw_glances(rng: np.random.Generator, seconds: float) -> tuple:
+    """Saccades over a clip: fixations of ``FIXATION_S``, each off the target (up to 12 deg aside,
+    6 deg up or down) with ``GLANCE_ODDS``, else back on it."""
+    shifts, t, away = [], float(rng.uniform(*FIXATION_S)) * rng.random(), False
+    while t < seconds:
+        go = rng.random() < GLANCE_ODDS
+        if go:
+            shifts.append((round(t, 4), round(float(rng.uniform(-12, 12)), 3), round(float(rng.uniform(-6, 6)), 3)))
+        elif away:
+            shifts.append((round(t, 4), 0.0, 0.0))
+        away = go
+        t += float(rng.uniform(*FIXATION_S))
+    return tuple(shifts)
 
 
 def load_compose_config(path: str) -> ComposeConfig:

@@ -11,7 +11,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from synmitsuba.body.eyes import GazeTarget, aim_eyes
+from synmitsuba.body.expressions import FACE_UNITS
+from synmitsuba.body.eyes import GazeTarget, aim_eyes, eye_look_weights
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
 from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose.instances import first_subject_instance, scene_instances
@@ -186,10 +187,16 @@ def fixed_hands(behaviour: str, seed: int) -> HandTrack:
 
 
 def aimed(motion: Motion, gaze: GazeTarget | None) -> Motion:
-    """The clip with both eyes turned towards ``gaze`` at every frame (unchanged for None)."""
+    """The clip with both eyes turned towards ``gaze`` at every frame, and the lids following
+    them: the ARKit eyeLook units set from the eyes' turn (``eyes.eye_look_weights``), which are
+    the face label's gaze too (unchanged for None)."""
     if gaze is None:
         return motion
-    return replace(motion, rotations=aim_eyes(motion.skeleton, motion.rotations, motion.root_translation, gaze))
+    rot = aim_eyes(motion.skeleton, motion.rotations, motion.root_translation, gaze, motion.fps)
+    face = np.zeros((motion.n_frames, len(FACE_UNITS))) if motion.face is None else motion.face.copy()
+    for unit, w in eye_look_weights(motion.skeleton, rot).items():
+        face[:, FACE_UNITS.index(unit)] = w
+    return replace(motion, rotations=rot, face=face)
 
 
 def clip_bounds(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> tuple[list, float, float]:
