@@ -241,18 +241,25 @@ def subject_specs(entries: list, rng: np.random.Generator, taken: set[int], base
         start = (len(hulls) // 2 if e.frame is None else e.frame) % len(hulls)
         position, yaw = (float(e.position[0]), float(e.position[-1])), float(e.yaw_deg)
         frames = np.roll(frame_boxes(hulls, yaw, position), -start, 0)
-        clip_ = motion.clip(f"{where}[{i}].motion") if "auto" in (e.hands, e.expression) else None
-        hands = fixed_hands(e.hands, mseed) if clip_ is None or e.hands != "auto" else \
-            draw_hands(np.random.default_rng([mseed, HAND_STREAM]), clip_)
-        face = fixed_face(e.expression, mseed) if clip_ is None or e.expression != "auto" else \
-            draw_face(np.random.default_rng([mseed, FACE_STREAM]), clip_)
+        hands, face = _hands_and_face(e, motion, f"{where}[{i}].motion")
         specs.append(SubjectSpec(recipe, replace(motion, start=start), position, yaw, ids[i], envelope(frames), frames,
                                  height, lift, hands=hands, face=face))
         humans.append(human)
     return specs, humans
 
 
-HAND_STREAM, FACE_STREAM = 7, 8  # a scene file subject's hands and face: drawn from (its motion seed, these)
+def _hands_and_face(e: SubjectEntry, motion: MotionSpec, where: str) -> tuple[HandTrack, FaceTrack]:
+    """A scene file subject's hands and face: what the entry fixes, else drawn for its clip from
+    (its motion seed, ``HAND_STREAM`` / ``FACE_STREAM``), not from the scene's rng."""
+    clip = motion.clip(where) if "auto" in (e.hands, e.expression) else None
+    hands = fixed_hands(e.hands, motion.seed) if clip is None or e.hands != "auto" else \
+        draw_hands(np.random.default_rng([motion.seed, HAND_STREAM]), clip)
+    face = fixed_face(e.expression, motion.seed) if clip is None or e.expression != "auto" else \
+        draw_face(np.random.default_rng([motion.seed, FACE_STREAM]), clip)
+    return hands, face
+
+
+HAND_STREAM, FACE_STREAM = 7, 8  # the streams a scene file subject's hands and face are drawn from
 
 
 def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str = "subjects") -> list[PlacedSubject]:
