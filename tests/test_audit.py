@@ -64,7 +64,7 @@ def test_flow_goes_to_the_next_rendered_sample(sm, demo):
         assert np.abs(flow[ground][ok] - (uv - centre[ground])[ok]).max() < 2e-3
         for p in placed:
             skin = (s.instance == p.instance) & (s.layer == int(sm.Layer.BODY)) & (s.body_face > 0)
-            body = p.human.pose(*p.motion.frame(f + STRIDE))[0].vertices
+            body = p.human.pose(*p.motion.frame(f + STRIDE), face=p.motion.face_at(f + STRIDE))[0].vertices
             tri = body[p.human.parts[0].faces[s.body_face[skin] - 1].astype(np.int64)]
             u, v = s.body_bary[skin, 0:1].astype(np.float64), s.body_bary[skin, 1:2].astype(np.float64)
             uv, z = _projected(cam, (1 - u - v) * tri[:, 0] + u * tri[:, 1] + v * tri[:, 2])

@@ -35,11 +35,11 @@ def _walker(rng, frames=20):
 def real_clips(sm):
     """Per-frame ground hulls of real subjects (all layers) over 1-second walk, jog, side-step
     and wave clips, centred as composition centres them."""
-    from synmitsuba.compose.subjects import MotionSpec, clip_bounds
+    from synmitsuba.compose.subjects import MotionSpec, clip_bounds, performed_clip
     clips = []
     for i, kind in enumerate(["walk", "jog", "side_step", "wave"]):
         human = sm.build_subject(sm.sample_subject(np.random.default_rng(10 + i), {"texture_size": 64}))
-        clips.append(clip_bounds(human, MotionSpec(kind, i, 1.0, 30.0))[0])
+        clips.append(clip_bounds(human, performed_clip(human, MotionSpec(kind, i, 1.0, 30.0))[0])[0])
     return clips
 
 

@@ -17,10 +17,10 @@ from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
-from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, draw_face, draw_hands
+from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, performed_clip
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
-from synmitsuba.motion.faces import with_face
-from synmitsuba.motion.hands import with_hands
+from synmitsuba.motion.faces import FaceTrack
+from synmitsuba.motion.hands import HandTrack
 from synmitsuba.schema import AnyOf, ListOf, Nested, Number, Params, Range, Text, optional, read_yaml, spec
 
 
@@ -136,8 +136,8 @@ GROUP_SHRINK = (1.0, 0.6, 0.35)  # group radii tried, times placement.group_radi
 
 def _subject_specs(drafts: list, placements: list, env) -> list:
     first = first_subject_instance(OBJECT_INSTANCE + len(env.objects) - 1)
-    return [SubjectSpec(d.recipe, d.motion, p.position, p.yaw_deg, first + i, p.footprint, p.frames, d.height, d.lift)
-            for i, (d, p) in enumerate(zip(drafts, placements))]
+    return [SubjectSpec(d.recipe, d.motion, p.position, p.yaw_deg, first + i, p.footprint, p.frames, d.height, d.lift,
+                        hands=d.hands, face=d.face) for i, (d, p) in enumerate(zip(drafts, placements))]
 
 
 @dataclass
@@ -147,6 +147,8 @@ class _Draft:
     recipe: SubjectRecipe
     motion: MotionSpec
     human: LayeredHuman
+    hands: HandTrack
+    face: FaceTrack
     hulls: list
     height: float
     lift: float
@@ -175,15 +177,18 @@ def _place(drafts: list, env, boxes: np.ndarray, cfg: ComposeConfig, sources: li
 def _redraw_motion(d: _Draft, sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:
     source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
     motion = MotionSpec(source, mseed, sc.seconds, sc.fps, base)
-    return _Draft(d.recipe, motion, d.human, *clip_bounds(d.human, motion, f"subjects[{i}].motion"))
+    return _drafted(d.recipe, motion, d.human, i)
 
 
 def _draft(sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:
     recipe = sample_subject(np.random.default_rng(int(rng.integers(2 ** 31))), sc.config)
     source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
-    human = build_subject(recipe)
-    motion = MotionSpec(source, mseed, sc.seconds, sc.fps, base)
-    return _Draft(recipe, motion, human, *clip_bounds(human, motion, f"subjects[{i}].motion"))
+    return _drafted(recipe, MotionSpec(source, mseed, sc.seconds, sc.fps, base), build_subject(recipe), i)
+
+
+def _drafted(recipe: SubjectRecipe, motion: MotionSpec, human: LayeredHuman, i: int) -> _Draft:
+    clip, hands, face = performed_clip(human, motion, f"subjects[{i}].motion")
+    return _Draft(recipe, motion, human, hands, face, *clip_bounds(human, clip))
 
 
 def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> tuple[list, list]:
@@ -211,15 +216,14 @@ def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> 
 
 def _direct(spec_: SceneSpec, rng) -> None:
     """Draw where each subject looks (drawn after the views: the first view's camera is a
-    target), what its hands and face do, and set the built subjects' eyes, fingers and faces so."""
+    target) and turn the built subjects' eyes there (their hands and faces came with their clips)."""
     scene, placed = spec_.build()
     mid = spec_.n_frames // 2
     camera = spec_.views[0].cameras[mid].center
     heads = [p.motion.joint_positions()[mid][[p.motion.skeleton.index(b) for b in EYE_BONES]].mean(0) for p in placed]
     for i, (s, p) in enumerate(zip(spec_.subjects, placed)):
         s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:], p.motion.duration)
-        s.hands, s.face = draw_hands(rng, p.motion), draw_face(rng, p.motion)
-        p.motion = aimed(with_face(with_hands(p.motion, s.hands), s.face), s.gaze)
+        p.motion = aimed(p.motion, s.gaze)
         p.pose_in(scene, 0)
 
 

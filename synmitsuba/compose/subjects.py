@@ -162,10 +162,10 @@ def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) ->
     """Subject ``i`` of a scene: built from its recipe (or ``human``, built from it already),
     its clip retargeted, placed, started at ``s.motion.start``, its hands, face and eyes set."""
     human = build_subject(s.recipe) if human is None else human
-    motion = place_motion(retargeted_clip(human, s.motion, f"subjects[{i}].motion"), s.position, s.yaw_deg, s.lift)
+    clip = with_face(with_hands(retargeted_clip(human, s.motion, f"subjects[{i}].motion"), s.hands), s.face)
+    motion = place_motion(clip, s.position, s.yaw_deg, s.lift)
     if s.motion.start:
         motion = motion.rolled(s.motion.start)
-    motion = with_face(with_hands(motion, s.hands), s.face)
     return PlacedSubject(human, aimed(motion, s.gaze), 0, s.instance, f"subject{i}")
 
 
@@ -199,14 +199,32 @@ def aimed(motion: Motion, gaze: GazeTarget | None) -> Motion:
     return replace(motion, rotations=rot, face=face)
 
 
-def clip_bounds(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> tuple[list, float, float]:
-    """The per-frame ground hulls of the subject's clip centred on its mean root position, its
-    tallest point over the clip and the lift that puts its lowest point over the clip on the
-    ground (retargeting keeps the source's root height, not the new legs' contact)."""
-    clip = place_motion(retargeted_clip(human, motion, where), (0.0, 0.0), 0.0)
+def performed_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motion", hands: str = "auto",
+                   expression: str = "auto") -> tuple[Motion, HandTrack, FaceTrack]:
+    """The subject's retargeted clip with its hands and face, and those tracks: ``hands`` (a
+    behaviour) and ``expression`` as given, or for "auto" drawn for the clip from (its motion
+    seed, ``HAND_STREAM`` / ``FACE_STREAM``), not from a scene's rng. The tracks are known before
+    placement: open fingers and a dropped jaw are part of the clip's footprint."""
+    clip = retargeted_clip(human, motion, where)
+    handed = draw_hands(np.random.default_rng([motion.seed, HAND_STREAM]), clip) if hands == "auto" else \
+        fixed_hands(hands, motion.seed)
+    face = draw_face(np.random.default_rng([motion.seed, FACE_STREAM]), clip) if expression == "auto" else \
+        fixed_face(expression, motion.seed)
+    return with_face(with_hands(clip, handed), face), handed, face
+
+
+HAND_STREAM, FACE_STREAM = 7, 8  # the streams a subject's hands and face are drawn from, with its motion seed
+
+
+def clip_bounds(human: LayeredHuman, clip: Motion) -> tuple[list, float, float]:
+    """The per-frame ground hulls of the subject's (retargeted, performed) clip centred on its
+    mean root position, its tallest point over the clip and the lift that puts its lowest point
+    over the clip on the ground (retargeting keeps the source's root height, not the new legs'
+    contact)."""
+    clip = place_motion(clip, (0.0, 0.0), 0.0)
     xz, height, low = [], -np.inf, np.inf
     for f in range(clip.n_frames):
-        layers = human.pose(*clip.frame(f), resolve=False)  # a few mm do not change a hull
+        layers = human.pose(*clip.frame(f), resolve=False, face=clip.face_at(f))  # a few mm do not change a hull
         pts = np.concatenate([(lay.points.reshape(-1, 3) if lay.is_curves else lay.vertices) for lay in layers])
         xz.append(pts[:, [0, 2]])
         height = max(height, float(pts[:, 1].max()))
@@ -237,29 +255,15 @@ def subject_specs(entries: list, rng: np.random.Generator, taken: set[int], base
         recipe = _recipe(e, draw if e.seed is None else e.seed, base)
         human = build_subject(recipe)
         motion = MotionSpec(e.motion, mseed, clip.seconds, clip.fps, base)
-        hulls, height, lift = clip_bounds(human, motion, f"{where}[{i}].motion")
+        performed, hands, face = performed_clip(human, motion, f"{where}[{i}].motion", e.hands, e.expression)
+        hulls, height, lift = clip_bounds(human, performed)
         start = (len(hulls) // 2 if e.frame is None else e.frame) % len(hulls)
         position, yaw = (float(e.position[0]), float(e.position[-1])), float(e.yaw_deg)
         frames = np.roll(frame_boxes(hulls, yaw, position), -start, 0)
-        hands, face = _hands_and_face(e, motion, f"{where}[{i}].motion")
         specs.append(SubjectSpec(recipe, replace(motion, start=start), position, yaw, ids[i], envelope(frames), frames,
                                  height, lift, hands=hands, face=face))
         humans.append(human)
     return specs, humans
-
-
-def _hands_and_face(e: SubjectEntry, motion: MotionSpec, where: str) -> tuple[HandTrack, FaceTrack]:
-    """A scene file subject's hands and face: what the entry fixes, else drawn for its clip from
-    (its motion seed, ``HAND_STREAM`` / ``FACE_STREAM``), not from the scene's rng."""
-    clip = motion.clip(where) if "auto" in (e.hands, e.expression) else None
-    hands = fixed_hands(e.hands, motion.seed) if clip is None or e.hands != "auto" else \
-        draw_hands(np.random.default_rng([motion.seed, HAND_STREAM]), clip)
-    face = fixed_face(e.expression, motion.seed) if clip is None or e.expression != "auto" else \
-        draw_face(np.random.default_rng([motion.seed, FACE_STREAM]), clip)
-    return hands, face
-
-
-HAND_STREAM, FACE_STREAM = 7, 8  # the streams a scene file subject's hands and face are drawn from
 
 
 def add_subjects(scene, entries: list, seed: int = 0, base: str = "", where: str = "subjects") -> list[PlacedSubject]:
