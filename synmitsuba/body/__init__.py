@@ -6,6 +6,9 @@ _EXPORTS = {"SubjectRecipe": "synmitsuba.body.recipe", "sample_subject": "synmit
             "PosedLayer": "synmitsuba.body.subject", "Skeleton": "synmitsuba.body.skeleton",
             "forward_kinematics": "synmitsuba.body.skeleton", "anny_uv_masks": "synmitsuba.body.anny_model",
             "GARMENT_KINDS": "synmitsuba.body.garments:GARMENTS",
-            "ACCESSORY_KINDS": "synmitsuba.body.accessories:BUILDERS"}
+            "ACCESSORY_KINDS": "synmitsuba.body.accessories:BUILDERS", "EyeParams": "synmitsuba.body.eyes",
+            "GazeTarget": "synmitsuba.body.eyes", "aim_eyes": "synmitsuba.body.eyes",
+            "BrowParams": "synmitsuba.body.brows", "FACE_UNITS": "synmitsuba.body.expressions",
+            "HAND_KEYPOINTS": "synmitsuba.body.hand_points"}
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 __all__ = sorted(_EXPORTS)
