@@ -134,6 +134,8 @@ def test_faces_follow_the_motion_and_round_trip():
     assert again == track and np.array_equal(again.weights(np.arange(10) / 5), track.weights(np.arange(10) / 5))
     with pytest.raises(ConfigError, match=r"face\.keys\[0\].*grin"):
         F.FaceTrack.from_dict({"keys": [[0, "grin", 1, 2]]})
+    with pytest.raises(ConfigError, match=r"face\.keys\[0\]"):
+        F.FaceTrack.from_dict({"keys": [[0, "smile"]]})
 
 
 def test_clips_carry_their_face_through_clipping_rolling_and_resampling(human):

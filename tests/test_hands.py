@@ -160,6 +160,8 @@ def test_hand_tracks_round_trip_and_bad_ones_are_named():
     assert np.array_equal(again.angles("right", np.arange(5) / 10), track.angles("right", np.arange(5) / 10))
     with pytest.raises(ConfigError, match=r"hands\.left\[0\].*claw"):
         H.HandTrack.from_dict({"left": [[0, "claw", 1]], "right": [[0, "fist", 1]]})
+    with pytest.raises(ConfigError, match=r"hands\.right\[0\]"):
+        H.HandTrack.from_dict({"left": [[0, "fist", 1]], "right": [[0, "fist"]]})
     with pytest.raises(ConfigError, match=r"subjects\[0\]\.hands"):
         from synmitsuba.compose.subjects import SubjectEntry
         SubjectEntry.from_dict({"hands": "claw"}, "subjects[0]")

@@ -149,6 +149,8 @@ class FaceTrack:
         if not rows:
             raise ConfigError(f"{where}.keys", rows, "give at least one [time, expression, intensity, seed] key")
         for i, r in enumerate(rows):
+            if not isinstance(r, (list, tuple)) or len(r) < 4:
+                raise ConfigError(f"{where}.keys[{i}]", r, "give [time, expression, intensity, seed]")
             if r[1] not in EXPRESSIONS:
                 raise ConfigError(f"{where}.keys[{i}]", r[1], f"use one of {', '.join(EXPRESSIONS)}")
         keys = sorted((FaceKey(float(r[0]), str(r[1]), float(r[2]), int(r[3])) for r in rows), key=lambda k: k.time)

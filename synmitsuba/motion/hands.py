@@ -161,6 +161,8 @@ class HandTrack:
             if not rows:
                 raise ConfigError(f"{where}.{side}", rows, "give at least one [time, behaviour, seed] key")
             for i, r in enumerate(rows):
+                if not isinstance(r, (list, tuple)) or len(r) < 3:
+                    raise ConfigError(f"{where}.{side}[{i}]", r, "give [time, behaviour, seed] (and a variant)")
                 if r[1] not in BEHAVIOURS:
                     raise ConfigError(f"{where}.{side}[{i}]", r[1], f"use one of {', '.join(BEHAVIOURS)}")
             return sorted((HandKey(float(r[0]), str(r[1]), int(r[2]), int(r[3]) if len(r) > 3 else 0) for r in rows),
