@@ -74,7 +74,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
                                           "valid": bool(v)} for s, o, i, v in
                                          zip(spec.subjects, view.occlusion, view.in_view, view.valid)])
             if annotator is not None:
-                annotator.annotate(sample, scene, int(f), valid=view.valid)
+                annotator.annotate(sample, scene, int(f), valid=view.valid, visible_min=view.visible_min)
                 flows.add(sample, view.cameras, int(f), targets[k])
             yield int(f), name, sample
         settle_frame_memory()

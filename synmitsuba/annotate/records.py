@@ -97,10 +97,11 @@ class Annotator:
         self.bodies.pose([b for _, b, _ in self._posed])
         self._frame = frame
 
-    def annotate(self, sample, scene: Scene, frame: int, valid=None) -> list[SubjectLabels]:
+    def annotate(self, sample, scene: Scene, frame: int, valid=None, visible_min: float = 0.0) -> list[SubjectLabels]:
         """Fill and return ``sample.subjects`` for ``scene`` posed at ``frame``. A record is
-        valid when some pixel of the subject is visible and ``valid`` (one bool per subject,
-        e.g. a view's validity from composition) allows it."""
+        valid when some pixel of the subject is visible, its visible fraction is at least
+        ``visible_min`` and ``valid`` (one bool per subject, e.g. a view's validity from
+        composition) allows it; invalid records are labelled all the same."""
         cam = sample.camera
         rays = pixel_centre_rays(cam).astype(np.float64)  # the instance pass's own rays: visible within amodal
         instances = {p.instance for p in self.subjects}
@@ -116,7 +117,8 @@ class Annotator:
             rec = self._record(p, rot, root, cam, scene, instances, amodal, visible, *self._posed[i])
             rec.expression = np.zeros(len(FACE_UNITS)) if face is None else np.asarray(face, np.float64)
             self._hands(rec, p, rot, root, cam, scene, instances, self._posed[i][1])
-            rec.valid = bool(rec.visible_fraction > 0 and (valid is None or valid[i]))
+            rec.valid = bool(rec.visible_fraction > 0 and rec.visible_fraction >= visible_min
+                             and (valid is None or valid[i]))
             rec.layer_pixels = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
             rec.add_body_models(body_model_params(p.fits, int(frame) % p.motion.n_frames, cam))
             records.append(rec)

@@ -41,9 +41,10 @@ def scene_spec(doc: SceneDoc | str, path: str, rng: np.random.Generator, seed: i
     cams, cfg = scene_cameras(doc), CameraConfig()
     frames = score_frames(n_frames, cfg.score_frames)
     at = [lambda f, c=c: (c.center, c) for _, c in cams]
-    occ, seen = score_views(scene, placed, at, frames, cfg.points, rng)
+    scores = score_views(scene, placed, at, frames, cfg.points, rng)
+    occ, seen = scores.occlusion, scores.in_view
     spec_.views = [ViewSpec(name, "static", [cam] * n_frames, occ[k], seen[k],
-                            (occ[k] <= cfg.occlusion_max) & (seen[k] >= cfg.in_view_min))
+                            (occ[k] <= cfg.occlusion_max) & (seen[k] >= cfg.in_view_min), 1 - cfg.occlusion_max)
                    for k, (name, cam) in enumerate(cams)]
     spec_.scored_frames = frames
     for p in placed:

@@ -33,16 +33,17 @@ class ViewSpec:
     occlusion: np.ndarray      # (S,) mean over the scored frames
     in_view: np.ndarray        # (S,) share of body points inside the image, mean over scored frames
     valid: np.ndarray          # (S,) bool
+    visible_min: float = 0.0   # a record whose visible fraction is below it is not valid (1 - occlusion_max)
 
     def to_dict(self) -> dict:
         return {"name": self.name, "kind": self.kind, "cameras": [c.to_dict() for c in self.cameras],
                 "occlusion": self.occlusion.tolist(), "in_view": self.in_view.tolist(),
-                "valid": [bool(v) for v in self.valid]}
+                "valid": [bool(v) for v in self.valid], "visible_min": float(self.visible_min)}
 
     @classmethod
     def from_dict(cls, d: dict) -> "ViewSpec":
         return cls(d["name"], d["kind"], [Camera.from_dict(c) for c in d["cameras"]], np.asarray(d["occlusion"], float),
-                   np.asarray(d["in_view"], float), np.asarray(d["valid"], bool))
+                   np.asarray(d["in_view"], float), np.asarray(d["valid"], bool), float(d.get("visible_min", 0.0)))
 
 
 @dataclass
