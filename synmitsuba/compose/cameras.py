@@ -58,7 +58,7 @@ def _handheld(s: _Shot, group: Group, azimuth: float, pitch: float, distance: fl
     s.eye = s.eye + cfg.shake_m * _smooth_noise(rng, F, 3)
     s.target = s.target + distance * np.tan(np.radians(cfg.shake_deg)) * _smooth_noise(rng, F, 3)
     roll = np.radians(cfg.shake_deg) * _smooth_noise(rng, F, 1)[:, 0]
-    side = np.cross(s.target - s.eye, [0.0, 1.0, 0.0])
+    side = np.cross(s.target - s.eye, s.up)
     side /= np.linalg.norm(side, axis=1, keepdims=True)
     s.up = np.cos(roll)[:, None] * s.up + np.sin(roll)[:, None] * side
 
@@ -79,12 +79,14 @@ CAMERA_MOTIONS: dict[str, CameraMotion] = {
     "dolly_zoom": CameraMotion(_dolly_zoom, zooms=True), "handheld": CameraMotion(_handheld),
 }
 MOTIONS = tuple(CAMERA_MOTIONS)
+MODES = ("shell", "ring", "head")
 
 
 @dataclass
 class CameraConfig(Params):
     count: int = spec(4, POSITIVE, doc="views per scene")
-    mode: str = spec("shell", Choice(("shell", "ring")), doc="ring: uniform azimuths around one subject (NeRF)")
+    mode: str = spec("shell", Choice(MODES), doc="ring: uniform azimuths around one subject (NeRF); head: worn "
+                     "on subjects' heads, looking ahead (egocentric)")
     width: int = spec(320, POSITIVE)
     height: int = spec(240, POSITIVE)
     hfov_deg: list = spec(factory=lambda: [30.0, 90.0], check=Range(5, 150), doc="horizontal field of view range")
@@ -115,6 +117,14 @@ class CameraConfig(Params):
     tangential: float = spec(0.0, Number(0, 0.01), doc="brown_conrady: max |p1|, |p2| per view")
     aperture_radius: list = spec(factory=lambda: [0.0, 0.0], check=Range(0, 0.1),
                                  doc="thin-lens aperture radius range, metres (0 = all in focus); focus on the subjects")
+    portrait: float = spec(0.0, Number(0, 1), doc="share of views in portrait (width and height swapped)")
+    framing_max: float = spec(1000.0, Number(1, 1000), doc="a view stands at most this many times L_min from the "
+                              "group: with a wide hfov_deg range, narrow and wide lenses frame the group alike")
+    height_m: list = spec(factory=lambda: [0.0, 1000.0], check=Range(0, 1000),
+                          doc="camera height above the ground at every frame, metres")
+    head_pitch_deg: list = spec(factory=lambda: [10.0, 35.0], check=Range(-60, 89),
+                                doc="head mode: how far below the head's forward the camera looks")
+    head_offset_m: float = spec(0.12, Number(0.05, 1), doc="head mode: camera in front of the eyes, metres")
 
 
 @dataclass
@@ -146,6 +156,26 @@ def l_min(group: Group, alpha: float, lam: float) -> float:
     return lam / np.sin(alpha / 2) * float(np.linalg.norm(pts - group.centre, axis=1).max())
 
 
+def frame_reach(cfg: CameraConfig) -> float:
+    """The largest radius max_i |pv_i - p̄| any view of this config can frame: the widest field
+    of view at the farthest distance any of its camera motions may start from (L_min <=
+    distance_max). A group (or one clip) that reaches further cannot be framed at all."""
+    sizes = ([(cfg.width, cfg.height)] if cfg.portrait < 1 else []) + ([(cfg.height, cfg.width)] if cfg.portrait else [])
+    alpha = max(narrow_fov(intrinsics(cfg.hfov_deg[1], w, h), w, h) for w, h in sizes)
+    reach = 0.0
+    for kind in cfg.motion:
+        zooms = CAMERA_MOTIONS[kind].zooms
+        far = cfg.distance_max / (max(1.0, cfg.zoom[1]) * max(1.0, 1.0 / cfg.zoom[0]) if zooms else 1.0)
+        reach = max(reach, far * np.sin(alpha / 2) / cfg.fit_lambda)
+    return float(reach)
+
+
+def box_radius(box: np.ndarray) -> float:
+    """Half the diagonal of a 3D box (6,): no point frames all its corners any closer, so a
+    clip whose box radius exceeds ``frame_reach`` cannot be framed wherever it stands."""
+    return float(np.linalg.norm(np.asarray(box[3:]) - np.asarray(box[:3])) / 2)
+
+
 def _smooth_noise(rng: np.random.Generator, n: int, dims: int) -> np.ndarray:
     """(n, dims) smooth noise in about [-1, 1]: three sinusoids of random frequency and phase."""
     t = np.linspace(0, 1, n)[:, None, None]
@@ -156,13 +186,19 @@ def _smooth_noise(rng: np.random.Generator, n: int, dims: int) -> np.ndarray:
 
 @dataclass
 class Trajectory:
-    """A camera over the clip: eye, target, up (F, 3) and K (F, 3, 3)."""
+    """A camera over the clip: eye, target, up (F, 3), K (F, 3, 3) and its image size."""
 
     kind: str
     eye: np.ndarray
     target: np.ndarray
     up: np.ndarray
     K: np.ndarray
+    width: int = 320
+    height: int = 240
+
+    @property
+    def portrait(self) -> bool:
+        return self.height > self.width
 
 
 def _direction(azimuth: float, pitch: float) -> np.ndarray:
@@ -170,18 +206,31 @@ def _direction(azimuth: float, pitch: float) -> np.ndarray:
     return np.array([np.cos(pitch) * np.sin(azimuth), np.sin(pitch), np.cos(pitch) * np.cos(azimuth)])
 
 
+STEEP_DEG = 75.0  # above this pitch the image's up is tilted with the view (world up nears the view axis)
+
+
+def _up(azimuth: float, pitch: float) -> np.ndarray:
+    """World up, or for a view steeper than ``STEEP_DEG`` (overhead) the unit vector square to
+    the view in its vertical plane: the image's top points away from the camera's side."""
+    if abs(np.degrees(pitch)) <= STEEP_DEG:
+        return np.array([0.0, 1.0, 0.0])
+    return np.array([-np.sin(pitch) * np.sin(azimuth), np.cos(pitch), -np.sin(pitch) * np.cos(azimuth)])
+
+
 
 
 def trajectory(kind: str, group: Group, azimuth: float, pitch: float, distance: float, K: np.ndarray,
-               cfg: CameraConfig, rng: np.random.Generator) -> Trajectory:
-    """One candidate camera over the clip (angles in radians)."""
+               cfg: CameraConfig, rng: np.random.Generator, size: tuple | None = None) -> Trajectory:
+    """One candidate camera over the clip (angles in radians); ``size`` (width, height): the
+    config's unless given (a portrait view)."""
     F = len(group.centres)
     t = np.linspace(0.0, 1.0, F)[:, None]
     target = np.repeat(group.centre[None], F, 0)
     eye = np.repeat((group.centre + distance * _direction(azimuth, pitch))[None], F, 0)
-    shot = _Shot(eye, target, np.repeat([[0.0, 1.0, 0.0]], F, 0), np.repeat(K[None], F, 0))
+    shot = _Shot(eye, target, np.repeat(_up(azimuth, pitch)[None], F, 0), np.repeat(K[None], F, 0))
     CAMERA_MOTIONS[kind].shape(shot, group, azimuth, pitch, distance, t, cfg, rng)
-    return Trajectory(kind, shot.eye, shot.target, shot.up, shot.K)
+    w, h = size or (cfg.width, cfg.height)
+    return Trajectory(kind, shot.eye, shot.target, shot.up, shot.K, w, h)
 
 
 def inside_boxes(points: np.ndarray, boxes: np.ndarray, margin: float = 0.1) -> np.ndarray:
@@ -199,8 +248,11 @@ def bounds_ok(traj: Trajectory, group: Group, object_boxes: np.ndarray, cfg: Cam
     dist = np.linalg.norm(rel, axis=1)
     view = traj.target - traj.eye
     pitch = np.degrees(np.arcsin(-view[:, 1] / np.linalg.norm(view, axis=1)))
-    lmins = np.array([l_min(group, narrow_fov(K, cfg.width, cfg.height), cfg.fit_lambda) for K in traj.K[[0, -1]]])
-    if not ((dist >= lmins.max() - 1e-9) & (dist <= cfg.distance_max + 1e-9)).all():
+    lmins = np.array([l_min(group, narrow_fov(K, traj.width, traj.height), cfg.fit_lambda) for K in traj.K[[0, -1]]])
+    far = min(cfg.distance_max, cfg.framing_max * lmins.min())
+    if not ((dist >= lmins.max() - 1e-9) & (dist <= far + 1e-9)).all():
+        return False
+    if not ((traj.eye[:, 1] >= cfg.height_m[0] - 1e-9) & (traj.eye[:, 1] <= cfg.height_m[1] + 1e-9)).all():
         return False
     if not ((pitch >= cfg.pitch_deg[0] - 1e-9) & (pitch <= cfg.pitch_deg[1] + 1e-9)).all():
         return False
@@ -210,9 +262,20 @@ def bounds_ok(traj: Trajectory, group: Group, object_boxes: np.ndarray, cfg: Cam
     return True
 
 
-def sample_intrinsics(cfg: CameraConfig, rng: np.random.Generator) -> np.ndarray:
+def sample_intrinsics(cfg: CameraConfig, rng: np.random.Generator, size: tuple | None = None) -> np.ndarray:
+    """K for a field of view drawn from ``hfov_deg`` (horizontal, of the image ``size``:
+    (width, height), the config's unless given) and a principal point within the jitter."""
+    w, h = size or (cfg.width, cfg.height)
     shift = rng.uniform(-cfg.principal_jitter, cfg.principal_jitter, 2) if cfg.principal_jitter else (0.0, 0.0)
-    return intrinsics(rng.uniform(*cfg.hfov_deg), cfg.width, cfg.height, shift)
+    return intrinsics(rng.uniform(*cfg.hfov_deg), w, h, shift)
+
+
+def view_sizes(cfg: CameraConfig, count: int, rng: np.random.Generator) -> list[tuple]:
+    """(width, height) of ``count`` views: portrait (swapped) with odds ``cfg.portrait``;
+    nothing is drawn when every view is landscape."""
+    if not cfg.portrait:
+        return [(cfg.width, cfg.height)] * count
+    return [(cfg.height, cfg.width) if rng.random() < cfg.portrait else (cfg.width, cfg.height) for _ in range(count)]
 
 
 @dataclass
@@ -224,7 +287,7 @@ class Optics:
     aperture_radius: float = 0.0
 
 
-def sample_optics(cfg: CameraConfig, rng: np.random.Generator, Ks: np.ndarray) -> Optics:
+def sample_optics(cfg: CameraConfig, rng: np.random.Generator, Ks: np.ndarray, size: tuple | None = None) -> Optics:
     """A view's optics drawn from the config's ranges; nothing is drawn for what is off, so a
     config without lens effects composes exactly as before they existed. A distortion that
     would fold back inside the image at any of the view's intrinsics ``Ks`` (F, 3, 3) is scaled
@@ -235,7 +298,8 @@ def sample_optics(cfg: CameraConfig, rng: np.random.Generator, Ks: np.ndarray) -
         dist[0], dist[1] = rng.uniform(*cfg.distortion), rng.uniform(*cfg.distortion_k2)
     if cfg.tangential and cfg.lens == "brown_conrady":
         dist[2:4] = rng.uniform(-cfg.tangential, cfg.tangential, 2)
-    reach = max(image_radius(K, cfg.width, cfg.height) for K in Ks)
+    w, h = size or (cfg.width, cfg.height)
+    reach = max(image_radius(K, w, h) for K in Ks)
     for _ in range(40):
         if not dist.any() or reach <= 0.9 * folded_radius(cfg.lens, dist):
             break
@@ -244,26 +308,32 @@ def sample_optics(cfg: CameraConfig, rng: np.random.Generator, Ks: np.ndarray) -
     return Optics(cfg.lens, dist, aperture)
 
 
-def candidates(group: Group, object_boxes: np.ndarray, cfg: CameraConfig, rng: np.random.Generator) -> list:
-    """Every trajectory on the shell grid that passes the bounds at every frame."""
+def candidates(group: Group, object_boxes: np.ndarray, cfg: CameraConfig, rng: np.random.Generator,
+               sizes: list | None = None) -> list:
+    """Every trajectory on the shell grid that passes the bounds at every frame; with several
+    image ``sizes`` (landscape and portrait), grid cells take them in turn."""
+    sizes = sorted(set(sizes or [(cfg.width, cfg.height)]))
     out = []
     az0 = rng.uniform(0, 2 * np.pi / cfg.azimuths)
     pitches = np.linspace(cfg.pitch_deg[0], cfg.pitch_deg[1], cfg.pitches + 2)[1:-1]
+    cell = 0
     for a in range(cfg.azimuths):
         for p in pitches:
             for s in range(cfg.shells):
-                K = sample_intrinsics(cfg, rng)
+                size = sizes[cell % len(sizes)]
+                cell += 1
+                K = sample_intrinsics(cfg, rng, size)
                 kind = str(rng.choice(cfg.motion))
-                lo = l_min(group, narrow_fov(K, cfg.width, cfg.height), cfg.fit_lambda)
+                lo = l_min(group, narrow_fov(K, *size), cfg.fit_lambda)
                 zooms = CAMERA_MOTIONS[kind].zooms
                 if zooms:
                     lo *= max(1.0, 1.0 / cfg.zoom[0])
-                hi = cfg.distance_max / (max(1.0, cfg.zoom[1]) if zooms else 1.0)
+                hi = min(cfg.distance_max / (max(1.0, cfg.zoom[1]) if zooms else 1.0), cfg.framing_max * lo)
                 if lo > hi:
                     continue
                 dist = lo + (hi - lo) * (s + rng.uniform(0.1, 0.9)) / cfg.shells
                 pitch = np.radians(p + rng.uniform(-0.4, 0.4) * np.diff(cfg.pitch_deg)[0] / (cfg.pitches + 1))
-                traj = trajectory(kind, group, az0 + 2 * np.pi * a / cfg.azimuths, pitch, dist, K, cfg, rng)
+                traj = trajectory(kind, group, az0 + 2 * np.pi * a / cfg.azimuths, pitch, dist, K, cfg, rng, size)
                 if bounds_ok(traj, group, object_boxes, cfg):
                     out.append(traj)
     return out
@@ -281,19 +351,74 @@ def ring(group: Group, subject: int, cfg: CameraConfig, rng: np.random.Generator
                        cfg.ring_distance, K, cfg, rng) for k in range(cfg.count)]
 
 
-def choose_views(scores: np.ndarray, azimuths: np.ndarray, count: int, tolerance: float) -> list[int]:
+HEAD_BONE = "head"
+
+
+def head_mounted(heads: list, cfg: CameraConfig, rng: np.random.Generator, sizes: list) -> list:
+    """Candidate cameras worn on the subjects' heads, ``head_offset_m`` in front of the eyes,
+    looking along the head's forward turned down by a pitch drawn from ``head_pitch_deg``
+    (egocentric rigs look down to see the hands): per subject as many as there are views plus
+    one, taking the image ``sizes`` in turn, so views may go to the wearers who see the others
+    best. ``heads``: per subject, the eyes' midpoint (F, 3) and the head bone's world rotations
+    (F, 3, 3) (forward is their z column, up their y)."""
+    out = []
+    sizes = sorted(set(sizes))
+    for eyes, R in heads:
+        for k in range(cfg.count + 1):
+            size = sizes[k % len(sizes)]
+            pitch = np.radians(rng.uniform(*cfg.head_pitch_deg))
+            forward, up = R[:, :, 2], R[:, :, 1]
+            eye = eyes + cfg.head_offset_m * forward
+            view = np.cos(pitch) * forward - np.sin(pitch) * up
+            K = sample_intrinsics(cfg, rng, size)
+            out.append(Trajectory("head", eye, eye + view, np.sin(pitch) * forward + np.cos(pitch) * up,
+                                  np.repeat(K[None], len(eye), 0), *size))
+    return out
+
+
+def tolerance_pools(quality: np.ndarray, tolerance: float, classes: np.ndarray, wanted: list) -> dict:
+    """Per class of candidate (an image size), its candidates best ``quality`` first, cut to
+    those within ``tolerance`` of the class's best unless fewer remain than slots want it."""
+    pools = {}
+    for c in set(wanted) | set(classes.tolist()):
+        idx = np.flatnonzero(classes == c)
+        order = [int(i) for i in idx[np.argsort(-quality[idx], kind="stable")]]
+        pool = [i for i in order if quality[i] >= quality[order[0]] - tolerance] if order else []
+        pools[c] = pool if len(pool) >= wanted.count(c) else order
+    return pools
+
+
+def slot_options(pools: dict, want, chosen: list) -> list:
+    """The candidates left for a slot that wants class ``want``: that class's pool, or when it
+    is used up, every other pool's (in class order)."""
+    rest = [i for i in pools.get(want, []) if i not in chosen]
+    return rest or [i for c in sorted(pools) for i in pools[c] if i not in chosen]
+
+
+def azimuth_gaps(options: list, chosen: list, azimuths: np.ndarray) -> np.ndarray:
+    """Each option's smallest azimuth difference to the chosen views (radians, rounded)."""
+    return np.round([min(abs((azimuths[i] - azimuths[j] + np.pi) % (2 * np.pi) - np.pi) for j in chosen)
+                     for i in options], 6)
+
+
+def choose_views(scores: np.ndarray, azimuths: np.ndarray, count: int, tolerance: float,
+                 classes: np.ndarray | None = None, wanted: list | None = None) -> list[int]:
     """Indices of ``count`` views: the best score first, then repeatedly the candidate within
-    ``tolerance`` of the best that is farthest in azimuth from the chosen ones (ties: score)."""
-    order = np.argsort(-scores, kind="stable")
-    pool = [i for i in order if scores[i] >= scores[order[0]] - tolerance]
-    if len(pool) < count:
-        pool = list(order)
-    chosen = [pool[0]]
-    while len(chosen) < min(count, len(pool)):
-        rest = [i for i in pool if i not in chosen]
-        gap = [min(abs((azimuths[i] - azimuths[j] + np.pi) % (2 * np.pi) - np.pi) for j in chosen) for i in rest]
-        best = max(range(len(rest)), key=lambda k: (round(gap[k], 6), scores[rest[k]]))
-        chosen.append(rest[best])
+    ``tolerance`` of the best that is farthest in azimuth from the chosen ones (ties: score).
+    ``classes`` (V,) and ``wanted`` (one class per view) keep each view to its image size."""
+    classes = np.zeros(len(scores), int) if classes is None else np.asarray(classes)
+    wanted = [int(classes[0]) if len(classes) else 0] * count if wanted is None else list(wanted)
+    pools = tolerance_pools(scores, tolerance, classes, wanted)
+    chosen: list[int] = []
+    for want in wanted:
+        rest = slot_options(pools, want, chosen)
+        if not rest:
+            break
+        if not chosen:
+            chosen.append(rest[0])
+            continue
+        gap = azimuth_gaps(rest, chosen, azimuths)
+        chosen.append(rest[max(range(len(rest)), key=lambda k: (gap[k], scores[rest[k]]))])
     return chosen
 
 
@@ -301,9 +426,11 @@ class NoViewFits(ConfigError):
     """No candidate camera frames the group within the bounds (composition then tightens the group)."""
 
 
-def check_count(found: int, cfg: CameraConfig, group: Group) -> None:
-    if found == 0:
+def check_count(found: int, cfg: CameraConfig, group: Group, least: int = 1) -> None:
+    """NoViewFits when fewer than ``least`` candidates pass the bounds."""
+    if found < least:
         alpha = np.radians(cfg.hfov_deg[1]) * min(1.0, cfg.height / cfg.width)
+        what = "no camera passes" if found == 0 else f"only {found} of the {least} views asked for pass"
         raise NoViewFits("cameras.distance_max", cfg.distance_max,
-                          f"no camera passes the bounds (L_min is at least {l_min(group, alpha, cfg.fit_lambda):.2f} m "
+                          f"{what} the bounds (L_min is at least {l_min(group, alpha, cfg.fit_lambda):.2f} m "
                           f"for this group); raise distance_max, widen pitch_deg or hfov_deg, or lower fit_lambda")

@@ -4,6 +4,7 @@ The config is a ``ComposeConfig`` or its dict (YAML: ``configs/compose.yaml`` sh
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -18,6 +19,7 @@ from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
 from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, performed_clip
+from synmitsuba.compose.visibility import VisibilityTarget, choose_for_target, lines_of_sight
 from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.motion.faces import FaceTrack
 from synmitsuba.motion.hands import HandTrack
@@ -41,6 +43,8 @@ class ComposeConfig(Params):
     subjects: SubjectsConfig = spec(factory=SubjectsConfig, check=Nested(SubjectsConfig))
     placement: PlacementConfig = spec(factory=PlacementConfig, check=Nested(PlacementConfig))
     cameras: cams.CameraConfig = spec(factory=cams.CameraConfig, check=Nested(cams.CameraConfig))
+    occlusion: VisibilityTarget = spec(factory=VisibilityTarget, check=Nested(VisibilityTarget),
+                                       doc="a share of subject records partly hidden, met by placement and views")
     base: str = spec("", doc="folder relative motion paths start from (a config file's own)")
 
 
@@ -51,6 +55,7 @@ def checked_sources(cfg: ComposeConfig, where: str = "") -> tuple[list, list[str
     all before any work starts."""
     from synmitsuba.motion.sources import check_motion_source, motion_files
     at = f"{where}." if where else ""
+    check_framing(cfg.cameras, f"{at}cameras")
     envs = [load_environment(n, f"{at}environments[{i}]") for i, n in enumerate(cfg.environments)]
     sources = []
     for i, m in enumerate(cfg.subjects.motions):
@@ -64,6 +69,19 @@ def checked_sources(cfg: ComposeConfig, where: str = "") -> tuple[list, list[str
             check_motion_source(m, cfg.base, key)
             sources.append(m)
     return envs, sources
+
+
+STANDING_RADIUS_M = 0.8  # box radius of a 1.5 m person standing still on a 0.4 x 0.3 m footprint
+
+
+def check_framing(cfg: cams.CameraConfig, where: str = "cameras") -> None:
+    """Refuse camera bounds that cannot frame even one person standing still (every
+    composition would fail): the reason names distance_max and the reach it allows."""
+    if cfg.mode == "shell" and cams.frame_reach(cfg) < STANDING_RADIUS_M:
+        raise ConfigError(f"{where}.distance_max", cfg.distance_max,
+                          f"no view can frame one standing person: at most {cams.frame_reach(cfg):.2f} m of the "
+                          f"{STANDING_RADIUS_M} m needed fits the widest field of view at that distance; raise "
+                          "distance_max or hfov_deg, or lower fit_lambda")
 
 
 def _group(subjects: list[SubjectSpec], target_height: float) -> cams.Group:
@@ -84,7 +102,7 @@ def _camera_at(t: cams.Trajectory, f: int, cfg: cams.CameraConfig, optics: cams.
     """The trajectory's camera at frame f; with ``optics``, its lens, focused at the depth of
     ``focus_at`` (the subjects' centre at that frame)."""
     from synmitsuba.scene.camera import Camera
-    cam = Camera.look_at(t.eye[f], t.target[f], t.up[f], width=cfg.width, height=cfg.height, K=t.K[f])
+    cam = Camera.look_at(t.eye[f], t.target[f], t.up[f], width=t.width, height=t.height, K=t.K[f])
     if optics is None:
         return cam
     focused = optics.aperture_radius > 0 and focus_at is not None
@@ -108,10 +126,11 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     lighting, ground_seed = sample_lighting(env, rng), int(rng.integers(2 ** 31))
     sc = cfg.subjects
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
-    drafts = [_draft(sc, sources, cfg.base, i, rng) for i in range(count)]
+    reach = cams.frame_reach(cfg.cameras) if cfg.cameras.mode == "shell" else np.inf
+    drafts = [_draft(sc, sources, cfg.base, i, rng, reach) for i in range(count)]
     boxes = object_boxes(env)
 
-    def composed(shrink: float) -> SceneSpec:  # cams.NoViewFits when no camera frames the group
+    def composed(shrink: float, least: int) -> SceneSpec:  # cams.NoViewFits: fewer than least views fit
         placing = cfg if shrink == 1.0 else replace(
             cfg, placement=replace(cfg.placement, group_radius=cfg.placement.group_radius * shrink))
         pool = list(drafts)  # _place draws new motions into it for subjects left out
@@ -120,15 +139,21 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
         spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, _subject_specs(placed, placements, env), [],
                           len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
         spec_.build([d.human for d in placed])
-        spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng)
+        spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng, cfg.occlusion, least)
         _direct(spec_, rng)
         return spec_
-    for shrink in GROUP_SHRINK[:-1]:  # while no camera frames the group, place it tighter
-        try:
-            return composed(shrink)
-        except cams.NoViewFits:
-            pass
-    return composed(GROUP_SHRINK[-1])
+    for redraw in range(MOTION_REDRAWS + 1):
+        for shrink in GROUP_SHRINK:  # while too few cameras frame the group, place it tighter
+            last = redraw == MOTION_REDRAWS and shrink == GROUP_SHRINK[-1]
+            try:  # the last try takes what views there are (with a warning)
+                return composed(shrink, 1 if last else cfg.cameras.count)
+            except cams.NoViewFits:
+                if last:
+                    raise
+        # then the clip that covers the most ground gets a new motion
+        widest = max(range(len(drafts)), key=lambda i: clip_radius(drafts[i]))
+        drafts[widest] = _redraw_motion(drafts[widest], sc, sources, cfg.base, widest, rng)
+    raise AssertionError("unreachable")
 
 
 GROUP_SHRINK = (1.0, 0.6, 0.35)  # group radii tried, times placement.group_radius, while no camera frames the group
@@ -161,17 +186,17 @@ def _place(drafts: list, env, boxes: np.ndarray, cfg: ComposeConfig, sources: li
     """``place_subjects``, and while it leaves subjects out, those subjects' motions drawn anew
     (another source and seed: a clip that may cover less ground) and everyone placed again, up
     to ``MOTION_REDRAWS`` rounds; only the last round's shortfall is warned about."""
-    import warnings
+    cluster = cfg.occlusion.cluster_odds if cfg.occlusion.on else 0.0
     for _ in range(MOTION_REDRAWS):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SynMitsubaWarning)
-            placements = place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng)
+            placements = place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng, cluster=cluster)
         placed = {p.index for p in placements}
         if len(placed) == len(drafts):
             return placements
         for i in sorted(set(range(len(drafts))) - placed):
             drafts[i] = _redraw_motion(drafts[i], cfg.subjects, sources, cfg.base, i, rng)
-    return place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng)
+    return place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng, cluster=cluster)
 
 
 def _redraw_motion(d: _Draft, sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:
@@ -180,10 +205,31 @@ def _redraw_motion(d: _Draft, sc: SubjectsConfig, sources: list, base: str, i: i
     return _drafted(d.recipe, motion, d.human, i)
 
 
-def _draft(sc: SubjectsConfig, sources: list, base: str, i: int, rng) -> _Draft:
+def _draft(sc: SubjectsConfig, sources: list, base: str, i: int, rng, reach: float = np.inf) -> _Draft:
+    """A sampled subject and clip; a clip no camera could frame (it covers more ground than
+    ``reach`` allows, say a 2-second run past a 10 m distance_max) gets new motions, up to
+    ``FRAMING_REDRAWS`` times: compositions that could succeed are drawn as before."""
     recipe = sample_subject(np.random.default_rng(int(rng.integers(2 ** 31))), sc.config)
     source, mseed = sources[int(rng.integers(len(sources)))], int(rng.integers(2 ** 31))
-    return _drafted(recipe, MotionSpec(source, mseed, sc.seconds, sc.fps, base), build_subject(recipe), i)
+    d = _drafted(recipe, MotionSpec(source, mseed, sc.seconds, sc.fps, base), build_subject(recipe), i)
+    for _ in range(FRAMING_REDRAWS):
+        if clip_radius(d) <= reach:
+            break
+        d = _redraw_motion(d, sc, sources, base, i, rng)
+    return d
+
+
+FRAMING_REDRAWS = 8  # new motions drawn for a clip no camera of the config can frame
+
+
+def clip_radius(d: _Draft) -> float:
+    """A lower bound of the radius max_i |pv_i - p̄| of any group holding this clip, under any
+    heading: half the distance between the opposite corners of its box, whose ground diagonal
+    is at least the clip's ground diameter."""
+    from scipy.spatial.distance import pdist
+    pts = np.concatenate(d.hulls)
+    diameter = float(pdist(pts).max()) if len(pts) > 1 else 0.0
+    return float(np.hypot(diameter, d.height)) / 2
 
 
 def _drafted(recipe: SubjectRecipe, motion: MotionSpec, human: LayeredHuman, i: int) -> _Draft:
@@ -191,27 +237,68 @@ def _drafted(recipe: SubjectRecipe, motion: MotionSpec, human: LayeredHuman, i: 
     return _Draft(recipe, motion, human, hands, face, *clip_bounds(human, clip))
 
 
-def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng) -> tuple[list, list]:
+def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng,
+           target: VisibilityTarget | None = None, least: int = 1) -> tuple[list, list]:
+    """The scene's views and the frames they were scored at; NoViewFits when fewer than
+    ``least`` candidates pass the bounds, a warning when fewer than ``cfg.count`` do."""
     group = _group(spec_.subjects, cfg.target_height)
-    trajs = cams.ring(group, 0, cfg, rng) if cfg.mode == "ring" else cams.candidates(group, boxes, cfg, rng)
-    cams.check_count(len(trajs), cfg, group)
-    frames = score_frames(spec_.n_frames, cfg.score_frames)
+    sizes = cams.view_sizes(cfg, cfg.count, rng)
     scene, placed = spec_.build()
+    trajs = _trajectories(group, placed, boxes, cfg, rng, sizes)
+    if target is not None and target.on and cfg.mode == "shell":
+        trajs += lines_of_sight(group, boxes, cfg, rng, sizes)
+    cams.check_count(len(trajs), cfg, group, least)
+    if len(trajs) < cfg.count:
+        warnings.warn(f"only {len(trajs)} of cameras.count = {cfg.count} views frame the group within the bounds; "
+                      "raise cameras.distance_max or lower placement.group_radius", SynMitsubaWarning, stacklevel=2)
+    frames = score_frames(spec_.n_frames, cfg.score_frames)
     at = [lambda f, t=t: (t.eye[f], _camera_at(t, f, cfg)) for t in trajs]
-    occ, seen = score_views(scene, placed, at, frames, cfg.points, rng)
-    score = ((1 - occ) * seen).mean(1)
-    chosen = list(range(len(trajs))) if cfg.mode == "ring" else cams.choose_views(
-        score, np.array([_azimuth(t, group.centre) for t in trajs]), cfg.count, cfg.score_tolerance)
+    scores = score_views(scene, placed, at, frames, cfg.points, rng)
+    occ, seen = scores.occlusion, scores.in_view
+    # worn cameras go to whoever sees the others best, not round the group
+    azimuths = np.zeros(len(trajs)) if cfg.mode == "head" else np.array([_azimuth(t, group.centre) for t in trajs])
+    classes = np.array([int(t.portrait) for t in trajs])
+    wanted = [int(h > w) for w, h in sizes]
+    if cfg.mode in FIXED_VIEWS:
+        chosen = list(range(len(trajs)))
+    elif target is not None and target.on:
+        chosen = choose_for_target(scores.visible, seen, azimuths, cfg.count, cfg.score_tolerance, target,
+                                   cfg.in_view_min, classes, wanted)
+    else:
+        chosen = cams.choose_views(((1 - occ) * seen).mean(1), azimuths, cfg.count, cfg.score_tolerance,
+                                   classes, wanted)
     views = []
     for k, c in enumerate(chosen):
         t = trajs[c]
         valid = (occ[c] <= cfg.occlusion_max) & (seen[c] >= cfg.in_view_min)
-        optics = cams.sample_optics(cfg, rng, t.K)
+        optics = cams.sample_optics(cfg, rng, t.K, (t.width, t.height))
         views.append(ViewSpec(f"cam{k}", t.kind, [_camera_at(t, f, cfg, optics, group.centres[f])
-                                                  for f in range(spec_.n_frames)], occ[c], seen[c], valid))
+                                                  for f in range(spec_.n_frames)], occ[c], seen[c], valid,
+                              1 - cfg.occlusion_max))
     for p in placed:
         p.pose_in(scene, 0)
     return views, frames
+
+
+FIXED_VIEWS = ("ring",)  # modes whose views are all taken, unscored for choice
+
+
+def _trajectories(group: cams.Group, placed: list, boxes: np.ndarray, cfg: cams.CameraConfig, rng,
+                  sizes: list) -> list:
+    """The candidate cameras of the config's mode: the shell grid, a ring around the first
+    subject, or cameras worn on the subjects' heads (chosen like the grid's, by what they see)."""
+    if cfg.mode == "ring":
+        return cams.ring(group, 0, cfg, rng)
+    if cfg.mode == "head":
+        return cams.head_mounted([_head(p.motion) for p in placed], cfg, rng, sizes)
+    return cams.candidates(group, boxes, cfg, rng, sizes)
+
+
+def _head(motion) -> tuple:
+    """A placed clip's eyes' midpoint (F, 3) and head bone world rotations (F, 3, 3)."""
+    sk = motion.skeleton
+    eyes = motion.joint_positions()[:, [sk.index(b) for b in EYE_BONES]].mean(1)
+    return eyes, motion.global_rotations()[:, sk.index(cams.HEAD_BONE)]
 
 
 def _direct(spec_: SceneSpec, rng) -> None:
@@ -221,23 +308,27 @@ def _direct(spec_: SceneSpec, rng) -> None:
     mid = spec_.n_frames // 2
     camera = spec_.views[0].cameras[mid].center
     heads = [p.motion.joint_positions()[mid][[p.motion.skeleton.index(b) for b in EYE_BONES]].mean(0) for p in placed]
+    # who wears the first view's camera, if anyone: the subject whose eyes are nearest it
+    wearer = int(np.argmin([np.linalg.norm(h - camera) for h in heads])) if spec_.views[0].kind == "head" else -1
     for i, (s, p) in enumerate(zip(spec_.subjects, placed)):
-        s.gaze = draw_gaze(rng, camera, heads[:i] + heads[i + 1:], p.motion.duration)
+        s.gaze = draw_gaze(rng, None if i == wearer else camera, heads[:i] + heads[i + 1:], p.motion.duration)
         p.motion = aimed(p.motion, s.gaze)
         p.pose_in(scene, 0)
 
 
-def _at_camera(rng, camera: np.ndarray, others: list) -> GazeTarget:
+def _at_camera(rng, camera: np.ndarray | None, others: list) -> GazeTarget:
+    if camera is None:  # the camera is on this subject's own head: ahead instead
+        return _ahead(rng, camera, others)
     return GazeTarget("camera", tuple(float(x) for x in camera))
 
 
-def _at_subject(rng, camera: np.ndarray, others: list) -> GazeTarget:
+def _at_subject(rng, camera: np.ndarray | None, others: list) -> GazeTarget:
     if not others:  # alone: the camera instead
         return _at_camera(rng, camera, others)
     return GazeTarget("subject", tuple(float(x) for x in others[int(rng.integers(len(others)))]))
 
 
-def _ahead(rng, camera: np.ndarray, others: list) -> GazeTarget:
+def _ahead(rng, camera: np.ndarray | None, others: list) -> GazeTarget:
     yaw, pitch = np.clip(rng.normal(0, 12), -25, 25), np.clip(rng.normal(-4, 8), -20, 15)
     return GazeTarget("ahead", None, round(float(yaw), 3), round(float(pitch), 3), round(float(rng.uniform(1.5, 8)), 3))
 
@@ -247,7 +338,7 @@ def _ahead(rng, camera: np.ndarray, others: list) -> GazeTarget:
 GAZE_DRAWS = {"camera": (0.4, _at_camera), "subject": (0.2, _at_subject), "ahead": (0.4, _ahead)}
 
 
-def draw_gaze(rng: np.random.Generator, camera: np.ndarray, others: list, seconds: float = 2.0) -> GazeTarget:
+def draw_gaze(rng: np.random.Generator, camera: np.ndarray | None, others: list, seconds: float = 2.0) -> GazeTarget:
     """A gaze target drawn by ``GAZE_DRAWS``' odds (``others`` are the other subjects' eyes),
     with glances away and back over a clip of ``seconds`` (``draw_glances``)."""
     odds = [p for p, _ in GAZE_DRAWS.values()]

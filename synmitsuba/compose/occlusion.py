@@ -32,19 +32,29 @@ def surface_samples(vertices, faces, n: int, rng: np.random.Generator) -> Surfac
     return SurfaceSamples(np.asarray(faces)[tri], w)
 
 
-def occlusion(scene, eyes: np.ndarray, points: np.ndarray, instance: int) -> np.ndarray:
-    """(C,) share of rays from each eye (C, 3) to the points (P, 3) that first hit an instance
+def occluded(scene, eyes: np.ndarray, points: np.ndarray, instance: int) -> np.ndarray:
+    """(C, P) whether the ray from each eye (C, 3) to each point (P, 3) first hits an instance
     other than ``instance`` (and other than nothing)."""
     C, P = len(eyes), len(points)
     ids = first_hits(scene, np.repeat(eyes, P, 0), np.tile(points, (C, 1))).reshape(C, P)
-    return ((ids != 0) & (ids != instance)).mean(1)
+    return (ids != 0) & (ids != instance)
+
+
+def occlusion(scene, eyes: np.ndarray, points: np.ndarray, instance: int) -> np.ndarray:
+    """(C,) share of rays from each eye (C, 3) to the points (P, 3) that first hit an instance
+    other than ``instance`` (and other than nothing)."""
+    return occluded(scene, eyes, points, instance).mean(1)
+
+
+def inside_image(camera: Camera, points: np.ndarray) -> np.ndarray:
+    """(P,) whether each point is in front of the camera and inside its image."""
+    uv, z = camera.project(points)
+    return (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)
 
 
 def in_view(camera: Camera, points: np.ndarray) -> float:
     """Share of points in front of the camera and inside its image."""
-    uv, z = camera.project(points)
-    ok = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)
-    return float(ok.mean())
+    return float(inside_image(camera, points).mean())
 
 
 def score_frames(n_frames: int, count: int) -> list[int]:
@@ -52,21 +62,37 @@ def score_frames(n_frames: int, count: int) -> list[int]:
     return sorted({int(round(x)) for x in np.linspace(0, n_frames - 1, min(count, n_frames))})
 
 
+@dataclass
+class ViewScores:
+    """What ray casting says of every candidate view (V) and subject (S): ``occlusion`` and
+    ``in_view`` (V, S), means over the scored frames (all the subject's points; those inside
+    the image); ``visible`` (V, S, F): per scored frame, the share of the subject's points
+    inside the image that nothing else hides (0 when none is inside), the estimate of a
+    record's ``visible_fraction``."""
+
+    occlusion: np.ndarray
+    in_view: np.ndarray
+    visible: np.ndarray
+
+
 def score_views(scene, placed: list, views: list, frames: list, points: int,
-                rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Occlusion and in-view share (V, S) of every view for every placed subject, averaged
-    over ``frames``; a view is a function of the frame giving ``(eye (3,), Camera)``. Leaves
-    the subjects posed at the last frame."""
+                rng: np.random.Generator) -> ViewScores:
+    """Ray-cast scores of every view for every placed subject at ``frames``; a view is a
+    function of the frame giving ``(eye (3,), Camera)``. Leaves the subjects posed at the last
+    frame."""
     samples = [surface_samples(p.human.parts[0].rest, p.human.parts[0].faces, points, rng) for p in placed]
-    occ = np.zeros((len(views), len(placed)))
-    seen = np.zeros_like(occ)
-    for f in frames:
+    V, S, F = len(views), len(placed), len(frames)
+    occ, seen, visible = np.zeros((V, S, F)), np.zeros((V, S, F)), np.zeros((V, S, F))
+    for k, f in enumerate(frames):
         for p in placed:
             p.pose_in(scene, f)
         at = [view(f) for view in views]
         eyes = np.stack([eye for eye, _ in at])
         for s, (p, smp) in enumerate(zip(placed, samples)):
             pts = smp.on(scene.meshes[f"{p.prefix}_body"].vertices)  # posed just above
-            occ[:, s] += occlusion(scene, eyes, pts, p.instance)
-            seen[:, s] += [in_view(cam, pts) for _, cam in at]
-    return occ / len(frames), seen / len(frames)
+            hidden = occluded(scene, eyes, pts, p.instance)
+            inside = np.stack([inside_image(cam, pts) for _, cam in at])
+            n = inside.sum(1)
+            occ[:, s, k], seen[:, s, k] = hidden.mean(1), n / len(pts)
+            visible[:, s, k] = np.where(n > 0, (inside & ~hidden).sum(1) / np.maximum(n, 1), 0.0)
+    return ViewScores(occ.mean(2), seen.mean(2), visible)

@@ -108,11 +108,33 @@ def _options(hulls, cands: np.ndarray, area, obstacles: np.ndarray, placed: list
     return options
 
 
+CLUSTER_GAP_M = 0.6  # a clustered subject's box stands at most this far from one already placed
+
+
+def _box_gap(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """Ground distances (N,) from a box (4,) to boxes (N, 4): 0 where they touch."""
+    dx = np.maximum(0, np.maximum(boxes[:, 0] - box[2], box[0] - boxes[:, 2]))
+    dz = np.maximum(0, np.maximum(boxes[:, 1] - box[3], box[1] - boxes[:, 3]))
+    return np.hypot(dx, dz)
+
+
+def _clustered(options: list, hulls, placed: list) -> list:
+    """The options whose whole-clip box stands within ``CLUSTER_GAP_M`` of a placed subject's
+    (all of them when none does)."""
+    placed_boxes = np.stack([p.footprint for p in placed])
+    at_origin = {yaw: envelope(frame_boxes(hulls, yaw)) for yaw in {o[0] for o in options}}
+    boxes = np.stack([at_origin[yaw] + np.concatenate([pos, pos]) for yaw, pos in options])
+    gaps = np.stack([_box_gap(b, boxes) for b in placed_boxes]).min(0)
+    near = [o for o, g in zip(options, gaps) if g <= CLUSTER_GAP_M]
+    return near or options
+
+
 def _attempt(hulls_per_subject: list, order: list, area, obstacles: np.ndarray, cands: np.ndarray,
-             cfg: PlacementConfig, rng: np.random.Generator) -> tuple[list, list]:
+             cfg: PlacementConfig, rng: np.random.Generator, cluster: float = 0.0) -> tuple[list, list]:
     """One placement pass over the subjects in ``order``: each placed at a random fitting
-    (yaw, position), one that fits nowhere skipped (later ones are still tried). Returns the
-    placements and the indices left out."""
+    (yaw, position), one that fits nowhere skipped (later ones are still tried); with odds
+    ``cluster`` a subject stands next to one already placed. Returns the placements and the
+    indices left out."""
     placed: list[Placement] = []
     left = []
     for i in order:
@@ -121,6 +143,8 @@ def _attempt(hulls_per_subject: list, order: list, area, obstacles: np.ndarray, 
         if not options:
             left.append(i)
             continue
+        if cluster > 0 and placed and rng.random() < cluster:
+            options = _clustered(options, hulls, placed)
         yaw, pos = options[int(rng.integers(len(options)))]
         frames = frame_boxes(hulls, yaw, pos)
         placed.append(Placement((float(pos[0]), float(pos[1])), yaw, envelope(frames), frames, i))
@@ -129,11 +153,12 @@ def _attempt(hulls_per_subject: list, order: list, area, obstacles: np.ndarray, 
 
 
 def place_subjects(hulls_per_subject: list, area, object_boxes: np.ndarray, cfg: PlacementConfig,
-                   rng: np.random.Generator, tries: int = PLACEMENT_TRIES) -> list[Placement]:
+                   rng: np.random.Generator, tries: int = PLACEMENT_TRIES, cluster: float = 0.0) -> list[Placement]:
     """Place subjects (their per-frame hulls centred on the clip's mean root position), one
     at a time, every one tried. When some do not fit, the whole placement is tried again (up
     to ``tries`` times) with fresh headings and picks, the largest whole-clip boxes first and
     the group radius widened step by step up to ``cfg.widen`` times; the best pass is kept.
+    ``cluster``: odds that a subject stands next to one already placed (occlusion targets).
     Returns the placements in subject order (``Placement.index``): all of them, or fewer with a
     warning naming who was left out; a ConfigError when none fits."""
     obstacles = np.asarray(object_boxes, np.float64).reshape(-1, 4)
@@ -145,7 +170,7 @@ def place_subjects(hulls_per_subject: list, area, object_boxes: np.ndarray, cfg:
     left = order
     for k in range(tries):
         widened = replace(cfg, group_radius=cfg.group_radius * (1 + (cfg.widen - 1) * k / max(tries - 1, 1)))
-        placed, missing = _attempt(hulls_per_subject, order, area, obstacles, cands, widened, rng)
+        placed, missing = _attempt(hulls_per_subject, order, area, obstacles, cands, widened, rng, cluster)
         if len(placed) > len(best):
             best, left = placed, missing
         if not left:
