@@ -117,6 +117,7 @@ def test_bad_output_and_config_fail_before_any_work(tmp_path):
     ("compose.subjects.motions=[walk, moonwalk]", "compose.subjects.motions[1] = 'moonwalk'"),
     ("compose.subjects.motions=[no/such.bvh]", "compose.subjects.motions[0] = 'no/such.bvh': no such file"),
     ("scene=no_such.yaml", "scene = "),
+    ("compose.cameras.distance_max=1.0", "compose.cameras.distance_max = 1.0: no view can frame one standing person"),
 ])
 def test_names_and_files_a_worker_would_use_are_checked_before_any_work(tmp_path, setting, named):
     """A bad environment, motion or scene file is one line naming its key, exit 2, before the
@@ -193,6 +194,15 @@ def test_stats_count_what_the_manifest_lists(tiny):
     assert stats["subjects"] == sum(e["subjects"] for e in manifest)
     assert sum(stats["keypoint_visibility"].values()) == 23 * stats["visible_fraction"]["n"]
     assert stats["camera_pitch_deg"]["n"] == stats["samples"] and (tiny / "stats.png").stat().st_size > 10000
+    # the partly hidden share and the cameras, recounted from the sample files
+    sides = [json.loads(p.read_text()) for p in sorted(tiny.glob("seq_*/*.json")) if p.name != "scene.json"]
+    vis = np.array([r["visible_fraction"] for s in sides for r in s["subjects"]])
+    assert stats["occlusion"]["visible"] == [0.3, 0.8] and stats["occlusion"]["target_share"] == 0.0
+    assert stats["occlusion"]["share"] == pytest.approx(((vis >= 0.3) & (vis <= 0.8)).mean())
+    assert stats["occlusion"]["valid_share"] == pytest.approx(np.mean([r["valid"] for s in sides for r in s["subjects"]]))
+    heights = sorted(float(-(np.array(s["camera"]["R"]).T @ s["camera"]["t"])[1]) for s in sides)
+    assert stats["camera_height_m"]["n"] == len(sides) and stats["camera_height_m"]["mean"] == pytest.approx(np.mean(heights))
+    assert sum(stats["cameras"].values()) == len(sides) and all(k.endswith("landscape") for k in stats["cameras"])
     run = subprocess.run([sys.executable, "-m", "synmitsuba", "stats", str(tiny / "nothing")], capture_output=True,
                          text=True)
     assert run.returncode == 2 and "no such folder" in run.stderr
