@@ -30,7 +30,8 @@ TARGET_SCALE = 0.1  # MakeHuman decimetres (y up) -> our metres (y up)
 
 def read_target(path: str) -> tuple[np.ndarray, np.ndarray]:
     """(base-mesh vertex ids (N,), offsets (N, 3)) of a MakeHuman ``.target`` file."""
-    rows = [line.split() for line in open(path) if line.strip() and not line.lstrip().startswith("#")]
+    with open(path) as fh:
+        rows = [line.split() for line in fh if line.strip() and not line.lstrip().startswith("#")]
     data = np.array(rows, dtype=np.float64).reshape(-1, 4)
     return data[:, 0].astype(np.int64), data[:, 1:]
 
