@@ -67,7 +67,10 @@ class MotionLibrary:
         if not os.path.isdir(folder):
             raise ConfigError("motion folder", folder, "no such folder")
         labels_file = os.path.join(folder, "labels.json")
-        given = json.load(open(labels_file)) if os.path.isfile(labels_file) else {}
+        given: dict = {}
+        if os.path.isfile(labels_file):
+            with open(labels_file) as fh:
+                given = json.load(fh)
         added = 0
         for path in motion_files(folder):
             f = os.path.basename(path)
