@@ -382,3 +382,13 @@ def test_loader_smpl24_joints_project_like_the_camera(sm, tiny):
     assert np.allclose(item["keypoints3d_cam"][0].numpy(), np.asarray(rec["joints3d_cam"])[idx], atol=1e-5)
     crop = sm.SynDataset(tiny, crop="person", size=64, keypoints="smpl24")[0]
     assert crop["keypoints2d"].shape == (24, 3) and crop["keypoints_mask"].sum() == 24
+
+
+def test_every_shipped_config_loads_and_frames_a_standing_person(sm):
+    """Each shipped config parses with every key checked and passes the up-front framing check
+    (a config whose cameras could not frame one person is refused before any work)."""
+    from synmitsuba.compose.composition import check_framing, load_compose_config
+    from synmitsuba.resources import config_names, find_config
+    for name in config_names():
+        cfg = load_compose_config(find_config(name)) if name == "compose" else sm.load_generate_config(name, []).compose
+        check_framing(cfg.cameras, "compose.cameras")

@@ -35,7 +35,7 @@ def test_a_wheel_installed_in_a_fresh_venv_generates_a_shipped_config_and_lists_
     assert where.startswith(site)
     shipped = sorted(p.stem for p in (ROOT / "synmitsuba" / "assets" / "scenes" / "environments").glob("*.yaml"))
     assert environments == shipped and len(shipped) >= 6
-    assert {"tiny", "demo", "hps", "nerf"} <= set(configs)
+    assert {"tiny", "demo", "hps", "crowds", "nerf"} <= set(configs)
     run = subprocess.run([str(python), "-m", "synmitsuba", "generate", "tiny", "--out", "data", "--quiet",
                           "--set", "frames=1", "--set", "sequences=1"], cwd=elsewhere, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]

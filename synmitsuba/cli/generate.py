@@ -37,7 +37,7 @@ def add_parser(sub) -> None:
                        "to DIR/seq_XXXXXX/ and listed in DIR/manifest.jsonl when complete. A rerun skips complete "
                        "sequences and redoes partial ones.")
     p.add_argument("config", help="generation config: a YAML path (configs/demo.yaml) or a shipped config by name "
-                   "(tiny, demo, hps, nerf, compose)")
+                   "(tiny, demo, hps, crowds, nerf, compose)")
     p.add_argument("--out", required=True, help="dataset folder (created)")
     p.add_argument("--sequences", type=positive_int, help="sequences (default: the config's)")
     p.add_argument("--seed", type=natural_int, help="global seed (default: the config's)")

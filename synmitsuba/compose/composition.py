@@ -186,7 +186,7 @@ def _place(drafts: list, env, boxes: np.ndarray, cfg: ComposeConfig, sources: li
     """``place_subjects``, and while it leaves subjects out, those subjects' motions drawn anew
     (another source and seed: a clip that may cover less ground) and everyone placed again, up
     to ``MOTION_REDRAWS`` rounds; only the last round's shortfall is warned about."""
-    cluster = cfg.occlusion.cluster_odds if cfg.occlusion.on else 0.0
+    cluster = cfg.occlusion.cluster if cfg.occlusion.on else 0.0
     for _ in range(MOTION_REDRAWS):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SynMitsubaWarning)

@@ -21,16 +21,13 @@ class VisibilityTarget(Params):
     share: float = spec(0.0, Number(0, 1), doc="wanted share of subject records whose visible fraction lies in "
                         "`visible` (0: no target, the clearest views win)")
     visible: list = spec(factory=lambda: [0.3, 0.8], check=Range(0, 1), doc="the partly hidden range of visible fraction")
-    cluster: float = spec(-1.0, Number(-1, 1), doc="odds that placement stands a subject next to one already placed "
-                          "(people in a line of sight hide each other); -1: the same as share")
+    cluster: float = spec(0.0, Number(0, 1), doc="odds that placement stands a subject next to one already placed "
+                          "(0.6 m at most); off by default: it hid people wholly more often than partly")
 
     @property
     def on(self) -> bool:
         return self.share > 0
 
-    @property
-    def cluster_odds(self) -> float:
-        return self.share if self.cluster < 0 else self.cluster
 
 
 AIMS_PER_PAIR = 4  # candidates per ordered pair of subjects on the line through them

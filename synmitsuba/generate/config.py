@@ -1,4 +1,4 @@
-"""Generation configs (``configs/tiny.yaml``, ``demo.yaml``, ``hps.yaml``, ``nerf.yaml``): how many
+"""Generation configs (``configs/tiny.yaml``, ``demo.yaml``, ``hps.yaml``, ``crowds.yaml``, ``nerf.yaml``): how many
 sequences, which frames, how to render, and the composition of each sequence's scene. Every
 value can be overridden with ``--set key.path=value`` (YAML syntax for the value)."""
 from __future__ import annotations
@@ -62,7 +62,7 @@ def _override(data: dict, assignment: str) -> None:
 
 
 def load_generate_config(path: str, overrides=()) -> GenerateConfig:
-    """The config in ``path`` (or a shipped one by name: ``tiny``, ``demo``, ``hps``, ``nerf``)
+    """The config in ``path`` (or a shipped one by name: ``tiny``, ``demo``, ``hps``, ``crowds``, ``nerf``)
     with ``overrides`` applied, every key checked (errors name the key path); the compose
     section's motion paths start at the file's folder."""
     path = find_config(path)
