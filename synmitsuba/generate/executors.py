@@ -101,10 +101,22 @@ class LocalPool:
 
     def _fill(self) -> None:
         """Start queued tasks up to the worker count (one at a time while suspects remain)."""
+        from concurrent.futures.process import BrokenProcessPool
         limit = 1 if self.suspects else self.workers
         while len(self.running) < limit and (self.suspects or self.queue):
-            i = (self.suspects or self.queue).pop(0)
-            self.running[self._pool().submit(attempt, self.task, self.config, i, self.out)] = i
+            source = self.suspects or self.queue
+            i = source.pop(0)
+            try:
+                fut = self._pool().submit(attempt, self.task, self.config, i, self.out)
+            except BrokenProcessPool:  # it broke after the last wait: the tasks still running will say so
+                source.insert(0, i)
+                if self.running:
+                    return
+                if self.pool is not None:
+                    self.pool.shutdown(wait=False, cancel_futures=True)
+                self.pool = None
+                continue
+            self.running[fut] = i
 
     def as_completed(self) -> Iterator[Outcome]:
         from concurrent.futures import FIRST_COMPLETED, wait
