@@ -170,12 +170,6 @@ def frame_reach(cfg: CameraConfig) -> float:
     return float(reach)
 
 
-def box_radius(box: np.ndarray) -> float:
-    """Half the diagonal of a 3D box (6,): no point frames all its corners any closer, so a
-    clip whose box radius exceeds ``frame_reach`` cannot be framed wherever it stands."""
-    return float(np.linalg.norm(np.asarray(box[3:]) - np.asarray(box[:3])) / 2)
-
-
 def _smooth_noise(rng: np.random.Generator, n: int, dims: int) -> np.ndarray:
     """(n, dims) smooth noise in about [-1, 1]: three sinusoids of random frequency and phase."""
     t = np.linspace(0, 1, n)[:, None, None]
@@ -364,11 +358,11 @@ def head_mounted(heads: list, cfg: CameraConfig, rng: np.random.Generator, sizes
     out = []
     sizes = sorted(set(sizes))
     for eyes, R in heads:
+        forward, up = R[:, :, 2], R[:, :, 1]
+        eye = eyes + cfg.head_offset_m * forward
         for k in range(cfg.count + 1):
             size = sizes[k % len(sizes)]
             pitch = np.radians(rng.uniform(*cfg.head_pitch_deg))
-            forward, up = R[:, :, 2], R[:, :, 1]
-            eye = eyes + cfg.head_offset_m * forward
             view = np.cos(pitch) * forward - np.sin(pitch) * up
             K = sample_intrinsics(cfg, rng, size)
             out.append(Trajectory("head", eye, eye + view, np.sin(pitch) * forward + np.cos(pitch) * up,

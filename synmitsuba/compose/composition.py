@@ -77,9 +77,10 @@ STANDING_RADIUS_M = 0.8  # box radius of a 1.5 m person standing still on a 0.4 
 def check_framing(cfg: cams.CameraConfig, where: str = "cameras") -> None:
     """Refuse camera bounds that cannot frame even one person standing still (every
     composition would fail): the reason names distance_max and the reach it allows."""
-    if cfg.mode == "shell" and cams.frame_reach(cfg) < STANDING_RADIUS_M:
+    reach = cams.frame_reach(cfg) if cfg.mode == "shell" else np.inf
+    if reach < STANDING_RADIUS_M:
         raise ConfigError(f"{where}.distance_max", cfg.distance_max,
-                          f"no view can frame one standing person: at most {cams.frame_reach(cfg):.2f} m of the "
+                          f"no view can frame one standing person: at most {reach:.2f} m of the "
                           f"{STANDING_RADIUS_M} m needed fits the widest field of view at that distance; raise "
                           "distance_max or hfov_deg, or lower fit_lambda")
 
@@ -296,9 +297,10 @@ def _trajectories(group: cams.Group, placed: list, boxes: np.ndarray, cfg: cams.
 
 def _head(motion) -> tuple:
     """A placed clip's eyes' midpoint (F, 3) and head bone world rotations (F, 3, 3)."""
+    from synmitsuba.body.skeleton import forward_kinematics
     sk = motion.skeleton
-    eyes = motion.joint_positions()[:, [sk.index(b) for b in EYE_BONES]].mean(1)
-    return eyes, motion.global_rotations()[:, sk.index(cams.HEAD_BONE)]
+    rotations, positions = forward_kinematics(sk, motion.rotations, motion.root_translation)  # once for both
+    return positions[:, [sk.index(b) for b in EYE_BONES]].mean(1), rotations[:, sk.index(cams.HEAD_BONE)]
 
 
 def _direct(spec_: SceneSpec, rng) -> None:

@@ -29,7 +29,6 @@ class VisibilityTarget(Params):
         return self.share > 0
 
 
-
 AIMS_PER_PAIR = 4  # candidates per ordered pair of subjects on the line through them
 OFFSET_M = (0.1, 0.45)  # how far the one behind stands aside of the one in front, as the camera sees them
 
@@ -38,9 +37,10 @@ def lines_of_sight(group: cams.Group, object_boxes: np.ndarray, cfg: cams.Camera
                    sizes: list) -> list:
     """Extra candidates for an occlusion target: cameras on the line through two subjects
     (at the clip's middle frame), beyond the first, so it stands in front of the second, with
-    the second shifted aside by 0.1-0.45 m (partly hidden, not wholly); distance, pitch and
-    intrinsics drawn as the shell grid draws them, kept only within the same bounds. A grid
-    of 24 azimuths passes such lines 0.8 m apart for people 3 m apart, and misses most."""
+    the second shifted aside by 0.1-0.45 m (partly hidden, not wholly); distance and pitch
+    drawn within the shell grid's ranges, the field of view from the part of ``hfov_deg`` that
+    frames the group, kept only within the same bounds. A grid of 24 azimuths passes such
+    lines 0.8 m apart for people 3 m apart, and misses most."""
     mid = group.frame_boxes[len(group.frame_boxes) // 2]
     feet = np.stack([(mid[:, 0] + mid[:, 3]) / 2, (mid[:, 2] + mid[:, 5]) / 2], 1)
     centre = group.centre[[0, 2]]
