@@ -305,6 +305,8 @@ def test_configuration_errors_name_the_key(sm, tmp_path):
     bad.write_text("cameras:\n  count: two\n")
     with pytest.raises(ConfigError, match=r"cameras\.count = 'two': give an integer"):
         load_compose_config(str(bad))
+    with pytest.raises(ConfigError, match=r"^occlusion\.share = 0\.3: ring views are fixed"):
+        sm.compose_scene({"occlusion": {"share": 0.3}, "cameras": {"mode": "ring"}}, rng)
     with pytest.raises(ConfigError, match=r"cameras\.distance_max = 0\.5: no view can frame one standing person"):
         sm.compose_scene({**SMALL, "subjects": {**SMALL["subjects"], "count": 1}, "cameras": {"distance_max": 0.5}}, rng)
 

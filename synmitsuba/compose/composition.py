@@ -56,6 +56,9 @@ def checked_sources(cfg: ComposeConfig, where: str = "") -> tuple[list, list[str
     from synmitsuba.motion.sources import check_motion_source, motion_files
     at = f"{where}." if where else ""
     check_framing(cfg.cameras, f"{at}cameras")
+    if cfg.occlusion.on and cfg.cameras.mode == "ring":
+        raise ConfigError(f"{at}occlusion.share", cfg.occlusion.share, "ring views are fixed round one subject, so no "
+                          "share can be chosen for; set 0, or use cameras.mode shell or head")
     envs = [load_environment(n, f"{at}environments[{i}]") for i, n in enumerate(cfg.environments)]
     sources = []
     for i, m in enumerate(cfg.subjects.motions):
