@@ -14,7 +14,7 @@ __version__ = "0.1.0"
 
 _FROM = {
     "synmitsuba.errors": ("ConfigError", "LLVMError", "SynMitsubaError", "SynMitsubaWarning"),
-    "synmitsuba.scene": ("Camera", "Layer", "Material", "Constant", "SunSky", "EnvMap", "PointLight",
+    "synmitsuba.scene": ("Camera", "Layer", "Material", "Blend", "Constant", "SunSky", "EnvMap", "PointLight",
                          "DirectionalLight", "AreaLight", "Scene", "MeshShape", "CurveShape"),
     "synmitsuba.sample": ("Sample", "PASSES", "register_pass"),
     "synmitsuba.engine.variant": ("set_variant", "current_variant"),

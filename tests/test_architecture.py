@@ -381,10 +381,14 @@ def test_new_kinds_are_one_registry_entry(monkeypatch):
     still = cameras.trajectory("static", group, 0.0, 0.0, 4.0, K, cfg, np.random.default_rng(0))
     crane = cameras.trajectory("crane", group, 0.0, 0.0, 4.0, K, cfg, np.random.default_rng(0))
     assert np.allclose(crane.eye - still.eye, [0.0, 1.0, 0.0]) and crane.kind == "crane"
-    monkeypatch.setitem(environments.GROUND_TEXTURES, "snow", lambda shade, *args: (np.ones_like(shade), 0.0))
+    from synmitsuba.compose import grounds
+
+    def snow(base, layout, tone, n, period):
+        return grounds.GroundMaps(np.broadcast_to(base, (n, n, 3)).copy(), np.zeros((n, n)), np.full((n, n), 0.6), period)
+    monkeypatch.setitem(grounds.GROUND_MATERIALS, "snow", grounds.GroundKind(snow, 5.0, (1.0, 1.0, 1.0)))
     ground = environments.Ground.from_dict({"texture": "snow", "color": [0.9, 0.8, 0.7]})
-    tex = environments.ground_texture(ground, np.random.default_rng(0), 8)
-    assert np.allclose(tex, [0.9, 0.8, 0.7])
+    mat, period = grounds.ground_material(ground.texture, ground.color, np.random.default_rng(0), ground.period_m, n=8)
+    assert np.allclose(mat.a.texture, [0.9, 0.8, 0.7]) and np.allclose(mat.b.roughness_map, 0.6) and period == 5.0
     with pytest.raises(ConfigError, match="texture = 'lava'"):
         environments.Ground.from_dict({"texture": "lava"})
     assert set(g.shape for g in garments.GARMENTS.values()) <= set(garments.GARMENT_SHAPES)

@@ -136,7 +136,7 @@ def test_composed_ground_is_exact_near_the_scene_and_still_where_nothing_moves(s
     near = (s.instance == 1) & (t < 10)
     assert near.sum() > 2000
     assert np.abs(s.passes["position"][near] - exact[near]).max() < 1e-4
-    assert np.abs(s.passes["uv"][near] - exact[near][:, [0, 2]] / env.ground.tile_m).max() < 1e-4
+    assert np.abs(s.passes["uv"][near] - exact[near][:, [0, 2]] / env.ground.period_m).max() < 1e-4
     now, then = Geometry({"mover": scene.meshes["mover"].vertices}), Geometry({"mover": PLANE * 0.2 + [0.1, 1, 2]})
     flow, flags = exact_flow(scene, cam, cam, now, then)
     still = (s.instance > 0) & (s.instance < 100) & (flags == SEEN)

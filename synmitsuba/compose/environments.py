@@ -12,12 +12,11 @@ import dataclasses
 import glob
 import os
 from dataclasses import dataclass, field
-from typing import Callable
-
 import numpy as np
 
 from synmitsuba.compose.instances import GROUND_INSTANCE, OBJECT_INSTANCE
 from synmitsuba.errors import ConfigError
+from synmitsuba.compose.grounds import GROUND_MATERIALS, ground_material
 from synmitsuba.geometry import ground_grid
 from synmitsuba.resources import asset_path
 from synmitsuba.schema import Choice, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
@@ -88,45 +87,16 @@ class EnvObject(Params):
     roughness: float = spec(0.7, Number(0, 1))
 
 
-def _tiles(shade, u, coarse, fine, rng):
-    """4 x 4 slabs with mortar joints and per-slab tone."""
-    tone = 0.85 + 0.3 * rng.random((4, 4))
-    idx = np.minimum((u * 4).astype(int), 3)
-    shade = shade * tone[idx[:, None], idx[None, :]]
-    joint = (np.abs((u * 4) % 1 - 0.5) > 0.47)
-    return np.where(joint[:, None] | joint[None, :], 0.45, shade), 0.0
-
-
-def _wood(shade, u, coarse, fine, rng):
-    """Planks along u with grain."""
-    plank = np.minimum((u * 6).astype(int), 5)
-    tone = 0.8 + 0.4 * rng.random(6)
-    grain = 0.9 + 0.1 * np.sin(2 * np.pi * (8 * u[None, :] + 3 * coarse))
-    shade = tone[plank][:, None] * grain * (0.95 + 0.1 * fine)
-    return np.where((np.abs((u * 6) % 1 - 0.5) > 0.48)[:, None], 0.4, shade), 0.0
-
-
-def _grass(shade, u, coarse, fine, rng):
-    """Blotchier than the rest, with yellowish patches."""
-    return 0.6 + 0.5 * coarse + 0.4 * (fine - 0.5), (coarse[..., None] - 0.5) * np.array([0.06, 0.03, -0.01])
-
-
-def _plain(shade, u, coarse, fine, rng):
-    return shade, 0.0
-
-
-# A ground kind is one entry: (shade (n, n) of the noise, u (n,), coarse and fine noise (n, n),
-# rng) -> (shade (n, n) times the ground's colour, an RGB offset added after).
-GROUND_TEXTURES: dict[str, Callable] = {"tiles": _tiles, "grass": _grass, "asphalt": _plain, "sand": _plain,
-                                        "wood": _wood, "concrete": _plain}
-
-
 @dataclass
 class Ground(Params):
-    texture: str = spec("concrete", Choice(GROUND_TEXTURES))
+    texture: str = spec("concrete", Choice(GROUND_MATERIALS), doc=", ".join(GROUND_MATERIALS))
     color: list = spec(factory=lambda: [0.35, 0.35, 0.33], check=Vector(3, 0, 1, what="linear RGB"))
-    tile_m: float = spec(1.0, Number(0.05, 20), doc="metres one texture repeat covers")
-    roughness: float = spec(0.8, Number(0, 1))
+    tile_m: float | None = spec(None, optional(Number(0.05, 20)), doc="metres one tile covers (default: the kind's)")
+    roughness: float = spec(1.0, Number(0, 2), doc="scales the material's roughness map")
+
+    @property
+    def period_m(self) -> float:
+        return float(self.tile_m or GROUND_MATERIALS[self.texture].period_m)
 
 
 @dataclass
@@ -239,32 +209,12 @@ def sample_lighting(env: Environment, rng: np.random.Generator) -> SunskyLightin
 
 
 # -- ground -------------------------------------------------------------------------------
-def _periodic_noise(rng: np.random.Generator, n: int, beta: float) -> np.ndarray:
-    """Seamlessly tiling noise: white noise shaped by 1/f^beta in Fourier space, in [0, 1]."""
-    f = np.fft.fftfreq(n)
-    r = np.hypot(*np.meshgrid(f, f))
-    r[0, 0] = 1.0
-    img = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((n, n))) / r ** beta))
-    return (img - img.min()) / (np.ptp(img) + 1e-12)
-
-
-def ground_texture(ground: Ground, rng: np.random.Generator, n: int = 256) -> np.ndarray:
-    """A tiling (n, n, 3) linear-RGB texture of the ground's kind around its colour."""
-    base = np.asarray(ground.color, np.float64)
-    coarse, fine = _periodic_noise(rng, n, 1.2), _periodic_noise(rng, n, 0.3)
-    shade = 0.75 + 0.3 * coarse + 0.15 * (fine - 0.5)
-    u = (np.arange(n) + 0.5) / n
-    shade, offset = GROUND_TEXTURES[ground.texture](shade, u, coarse, fine, rng)
-    tex = base[None, None, :] * shade[..., None] + offset
-    return np.clip(tex, 0.0, 1.0).astype(np.float32)
-
-
 def add_ground(scene, ground: Ground, rng: np.random.Generator) -> None:
+    """The ground grid to the horizon with its procedural material (``grounds.ground_material``);
+    uv is metres over the tile period."""
     v, faces = ground_grid(GROUND_HALF_SIZE)
-    uv = v[:, [0, 2]] / ground.tile_m
-    mat = Material(texture=ground_texture(ground, rng), kind="principled", roughness=ground.roughness, specular=0.3,
-                   name="ground")
-    scene.add_mesh("ground", v, faces, uv=uv, normals=np.tile([0, 1.0, 0], (len(v), 1)),
+    mat, period = ground_material(ground.texture, ground.color, rng, ground.period_m, roughness_scale=ground.roughness)
+    scene.add_mesh("ground", v, faces, uv=v[:, [0, 2]] / period, normals=np.tile([0, 1.0, 0], (len(v), 1)),
                    material=mat, instance=GROUND_INSTANCE, layer=int(Layer.GROUND))
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from synmitsuba.geometry import frame
 from synmitsuba.process import SETTINGS
-from synmitsuba.scene.materials import (AreaLight, Constant, DirectionalLight, EnvMap, Material,
+from synmitsuba.scene.materials import (AreaLight, Blend, Constant, DirectionalLight, EnvMap, Material,
                                         PointLight, SunSky, hair_pigments, hair_sigma_a)
 from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
 
@@ -30,9 +30,27 @@ def _bitmap(arr: np.ndarray) -> dict:
             "raw": True, "filter_type": "bilinear", "wrap_mode": "repeat"}
 
 
-def bsdf_dict(mat: Material) -> dict:
-    """Mitsuba BSDF dict for a Material."""
-    color = _bitmap(mat.texture) if mat.texture is not None else {"type": "rgb", "value": _rgb_list(mat.base_color)}
+def _repeated(tiles: dict, repeat: tuple) -> dict:
+    if tuple(repeat) != (1.0, 1.0):
+        import mitsuba as mi
+        tiles["to_uv"] = mi.ScalarTransform4f().scale([*repeat, 1.0])
+    return tiles
+
+
+def _blend_dict(mat: Blend) -> dict:
+    bsdf = {"type": "blendbsdf", "weight": _repeated(_bitmap(mat.weight), mat.weight_repeat),
+            "bsdf_0": bsdf_dict(mat.a), "bsdf_1": bsdf_dict(mat.b)}
+    if mat.normal_map is not None:
+        bsdf = {"type": "normalmap", "normalmap": _repeated(_bitmap(mat.normal_map), mat.normal_map_repeat), "bsdf": bsdf}
+    return bsdf
+
+
+def bsdf_dict(mat: Material | Blend) -> dict:
+    """Mitsuba BSDF dict for a Material (or a Blend of two)."""
+    if isinstance(mat, Blend):
+        return _blend_dict(mat)
+    color = (_repeated(_bitmap(mat.texture), mat.texture_repeat) if mat.texture is not None
+             else {"type": "rgb", "value": _rgb_list(mat.base_color)})
     if mat.kind == "hair":
         rough = {"longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3}
         if mat.strand_melanin is None:
@@ -43,7 +61,8 @@ def bsdf_dict(mat: Material) -> dict:
         sigma = hair_sigma_a(mat.strand_melanin, mat.redness)[:, None, :]
         return {"type": "hair", "sigma_a": {**_bitmap(sigma), "filter_type": "nearest", "wrap_mode": "clamp"}, **rough}
     if mat.kind == "principled":
-        roughness: Any = _bitmap(mat.roughness_map) if mat.roughness_map is not None else mat.roughness
+        roughness: Any = (_repeated(_bitmap(mat.roughness_map), mat.texture_repeat) if mat.roughness_map is not None
+                          else mat.roughness)
         bsdf = {"type": "principled", "base_color": color, "roughness": roughness,
                 "metallic": mat.metallic, "specular": mat.specular}
     else:
@@ -53,11 +72,7 @@ def bsdf_dict(mat: Material) -> dict:
     if mat.bump is not None:
         bsdf = {"type": "bumpmap", "height": _bitmap(mat.bump), "scale": float(mat.bump_scale), "bsdf": bsdf}
     if mat.normal_map is not None:
-        tiles = _bitmap(mat.normal_map)
-        if mat.normal_map_repeat != (1.0, 1.0):
-            import mitsuba as mi
-            tiles["to_uv"] = mi.ScalarTransform4f().scale([*mat.normal_map_repeat, 1.0])
-        bsdf = {"type": "normalmap", "normalmap": tiles, "bsdf": bsdf}
+        bsdf = {"type": "normalmap", "normalmap": _repeated(_bitmap(mat.normal_map), mat.normal_map_repeat), "bsdf": bsdf}
     return bsdf
 
 

@@ -57,7 +57,8 @@ class Material:
     ``strand_melanin`` (N,) in [0, 1] gives a ``hair`` material on curves of N strands one
     melanin per strand (replacing ``melanin``): locks of slightly different shade.
     ``texture`` replaces ``base_color``; ``roughness_map`` (H, W in [0, 1]) replaces
-    ``roughness`` for ``principled``; ``bump`` (H, W height map, scaled by ``bump_scale``)
+    ``roughness`` for ``principled``; both are repeated ``texture_repeat`` (u, v) times over the
+    uv square; ``bump`` (H, W height map, scaled by ``bump_scale``)
     and ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded, repeated ``normal_map_repeat``
     (u, v) times over the uv square; over the bump when both are given) perturb shading normals.
     """
@@ -73,6 +74,7 @@ class Material:
     normal_map: np.ndarray | None = None
     normal_map_repeat: tuple = (1.0, 1.0)
     roughness_map: np.ndarray | None = None
+    texture_repeat: tuple = (1.0, 1.0)
     two_sided: bool = True
     melanin: float = 0.3
     redness: float = 0.0
@@ -97,15 +99,49 @@ class Material:
             self.bump = _image("material.bump", self.bump, None)
         if self.normal_map is not None:
             self.normal_map = _image("material.normal_map", self.normal_map, 3)
-        rep = np.asarray(self.normal_map_repeat, np.float64).ravel()
-        if rep.size != 2 or not np.isfinite(rep).all() or (rep <= 0).any():
-            raise ConfigError("material.normal_map_repeat", self.normal_map_repeat, "give two positive repeats (u, v)")
-        self.normal_map_repeat = (float(rep[0]), float(rep[1]))
+        self.normal_map_repeat = _repeat("material.normal_map_repeat", self.normal_map_repeat)
+        self.texture_repeat = _repeat("material.texture_repeat", self.texture_repeat)
         if self.roughness_map is not None:
             self.roughness_map = _image("material.roughness_map", self.roughness_map, None)
             if self.roughness_map.min() < 0 or self.roughness_map.max() > 1:
                 raise ConfigError("material.roughness_map", f"values in [{self.roughness_map.min():.3g}, "
                                   f"{self.roughness_map.max():.3g}]", "give roughness values in [0, 1]")
+
+
+@dataclass
+class Blend:
+    """Two materials mixed by a weight map (H, W) in [0, 1] (0: ``a``, 1: ``b``) repeated
+    ``weight_repeat`` (u, v) times over the uv square, under one optional tangent-space
+    ``normal_map`` (as ``Material``'s). Grounds use it to vary a tiled material over tens of metres."""
+
+    a: Material
+    b: Material
+    weight: np.ndarray
+    weight_repeat: tuple = (1.0, 1.0)
+    normal_map: np.ndarray | None = None
+    normal_map_repeat: tuple = (1.0, 1.0)
+    name: str = ""
+
+    def __post_init__(self):
+        for f in ("a", "b"):
+            if not isinstance(getattr(self, f), Material) or getattr(self, f).normal_map is not None:
+                raise ConfigError(f"blend.{f}", type(getattr(self, f)).__name__,
+                                  "give a Material without a normal map (the blend carries it)")
+        self.weight = _image("blend.weight", self.weight, None)
+        if self.weight.min() < 0 or self.weight.max() > 1:
+            raise ConfigError("blend.weight", f"values in [{self.weight.min():.3g}, {self.weight.max():.3g}]",
+                              "give weights in [0, 1]")
+        if self.normal_map is not None:
+            self.normal_map = _image("blend.normal_map", self.normal_map, 3)
+        self.weight_repeat = _repeat("blend.weight_repeat", self.weight_repeat)
+        self.normal_map_repeat = _repeat("blend.normal_map_repeat", self.normal_map_repeat)
+
+
+def _repeat(name: str, value) -> tuple[float, float]:
+    rep = np.asarray(value, np.float64).ravel()
+    if rep.size != 2 or not np.isfinite(rep).all() or (rep <= 0).any():
+        raise ConfigError(name, value, "give two positive repeats (u, v)")
+    return float(rep[0]), float(rep[1])
 
 
 # Mitsuba's hair BSDF absorption per unit eumelanin and pheomelanin concentration (linear RGB)
