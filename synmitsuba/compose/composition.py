@@ -13,7 +13,8 @@ from synmitsuba.body.eyes import EYE_BONES, GazeTarget
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
 from synmitsuba.body.subject import LayeredHuman, build_subject
 from synmitsuba.compose import cameras as cams
-from synmitsuba.compose.environments import environment_names, load_environment, object_boxes, sample_lighting
+from synmitsuba.compose.environments import (environment_names, keep_out_boxes, load_environment, object_boxes,
+                                             sample_lighting)
 from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import score_frames, score_views
 from synmitsuba.compose.placement import PlacementConfig, place_subjects
@@ -132,7 +133,7 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
     reach = cams.frame_reach(cfg.cameras) if cfg.cameras.mode == "shell" else np.inf
     drafts = [_draft(sc, sources, cfg.base, i, rng, reach) for i in range(count)]
-    boxes = object_boxes(env)
+    boxes = np.concatenate([object_boxes(env), keep_out_boxes(env)])  # objects, and where no camera may go
 
     def composed(shrink: float, least: int) -> SceneSpec:  # cams.NoViewFits: fewer than least views fit
         placing = cfg if shrink == 1.0 else replace(

@@ -16,10 +16,11 @@ import numpy as np
 
 from synmitsuba.compose.instances import GROUND_INSTANCE, OBJECT_INSTANCE
 from synmitsuba.errors import ConfigError
+from synmitsuba.compose.backdrop import add_backdrop
 from synmitsuba.compose.grounds import GROUND_MATERIALS, ground_material
 from synmitsuba.geometry import ground_grid
 from synmitsuba.resources import asset_path
-from synmitsuba.schema import Choice, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
+from synmitsuba.schema import Choice, Flag, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
 from synmitsuba.scene.layers import Layer
 from synmitsuba.scene.materials import EnvMap, Material, SunSky
 
@@ -111,6 +112,15 @@ class Lighting(Params):
 
 
 @dataclass
+class Backdrop(Params):
+    """The HDRI projected onto the ground (the environment's ``ground`` is then not used)."""
+
+    height_m: float = spec(1.7, Number(0.2, 20), doc="how high above its ground the panorama was shot")
+    radius_m: float = spec(30.0, Number(2, 1000), doc="the projected ground's radius; beyond it, the photo on a dome")
+    key_light: bool = spec(True, Flag(), doc="the panorama's sun (if it has one) as a directional light")
+
+
+@dataclass
 class Environment(Params):
     """An environment template (see ``scenes/environments/*.yaml``)."""
 
@@ -121,30 +131,47 @@ class Environment(Params):
     ground: Ground = spec(factory=Ground, check=Nested(Ground))
     objects: list = spec(factory=list, check=ListOf(Nested(EnvObject)))
     lighting: Lighting = spec(factory=Lighting, check=Nested(Lighting))
+    mesh: str | None = spec(None, optional(Text()), doc="your own scene: a glTF/GLB, OBJ or PLY file (relative to "
+                            "this file; y up), its floor found by ray casting; area and ground then come from it")
+    mesh_scale: float = spec(1.0, Number(1e-4, 1e4), doc="metres per mesh unit")
+    backdrop: Backdrop | None = spec(None, optional(Nested(Backdrop)),
+                                     doc="an envmap's photo as the ground, catching shadows (BEDLAM's HDRI scenes)")
     path: str = field(default="", metadata={"doc": "the file it came from"})
 
     def __post_init__(self):
         a = self.area
         if not (a[0] < a[2] and a[1] < a[3]):
             raise ConfigError("area", a, "give [x_min, z_min, x_max, z_max] with x_min < x_max and z_min < z_max")
+        if self.backdrop is not None and self.lighting.type != "envmap":
+            raise ConfigError("backdrop", "set", f"a backdrop projects an HDRI: give lighting.type envmap (not "
+                              f"{self.lighting.type}) or remove the backdrop")
 
 
 def environment_names() -> list[str]:
     return sorted(os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.path.join(ENV_DIR, "*.yaml")))
 
 
+MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
+
+
 def load_environment(name_or_path: str, where: str = "environment") -> Environment:
-    """An environment by name (``scenes/environments/<name>.yaml``) or by file path."""
+    """An environment by name (``scenes/environments/<name>.yaml``), by file path, or a mesh
+    file (glTF/GLB, OBJ, PLY) taken as ``{mesh: <file>}`` under a sun and sky."""
     import yaml
     path = name_or_path if os.path.isfile(str(name_or_path)) else os.path.join(ENV_DIR, f"{name_or_path}.yaml")
     if not os.path.isfile(path):
         raise ConfigError(where, name_or_path, f"no such environment; use one of {', '.join(environment_names())} "
-                          "or the path of an environment YAML file")
-    with open(path) as fh:
-        data = yaml.safe_load(fh) or {}
+                          "or the path of an environment YAML file or a mesh (.glb, .gltf, .obj, .ply)")
+    if path.lower().endswith(MESH_SUFFIXES):
+        data = {"name": os.path.splitext(os.path.basename(path))[0], "mesh": os.path.basename(path)}
+    else:
+        with open(path) as fh:
+            data = yaml.safe_load(fh) or {}
     data.pop("path", None)
     env = Environment.from_dict(data, f"{where}({os.path.basename(path)})")
     env.path = os.path.abspath(path)
+    if env.mesh is not None:
+        env.area = mesh_floor(env, where)[1].area
     if env.lighting.type == "envmap":
         hdri = os.path.join(os.path.dirname(env.path), env.lighting.file or "")
         if not os.path.isfile(hdri):
@@ -232,21 +259,76 @@ def object_parts(obj: EnvObject) -> list:
 
 
 def object_boxes(env: Environment) -> np.ndarray:
-    """(N, 6) world bounds ``(x_min, y_min, z_min, x_max, y_max, z_max)`` of every object."""
+    """(N, 6) world bounds ``(x_min, y_min, z_min, x_max, y_max, z_max)`` of every object (and
+    of a mesh environment's obstacles, in floor cells)."""
     boxes = []
     for obj in env.objects:
         pts = np.concatenate([m.vertices for m, _ in object_parts(obj)])
         boxes.append(np.concatenate([pts.min(0), pts.max(0)]))
-    return np.asarray(boxes, np.float64).reshape(-1, 6)
+    out = np.asarray(boxes, np.float64).reshape(-1, 6)
+    return out if env.mesh is None else np.concatenate([out, mesh_floor(env)[1].obstacles])
+
+
+def mesh_floor(env: Environment, where: str = "environment"):
+    """(parts, ``meshenv.MeshFloor``) of a mesh environment (read once per file version)."""
+    from synmitsuba.compose.meshenv import mesh_environment
+    path = os.path.join(os.path.dirname(env.path), str(env.mesh))
+    if not os.path.isfile(path):
+        raise ConfigError(f"{where}.mesh", env.mesh, "give an existing glTF/GLB, OBJ or PLY file, relative to the "
+                          "environment file")
+    return mesh_environment(os.path.abspath(path), float(env.mesh_scale), os.path.getmtime(path))
+
+
+def add_mesh_environment(scene, env: Environment) -> None:
+    """A mesh environment's pieces, lifted so its floor lies at y = 0: floor faces as the ground
+    (its instance and layer), the rest as one object."""
+    from synmitsuba.compose.meshenv import split_floor
+    parts, floor = mesh_floor(env)
+    for p in parts:
+        lifted = p.vertices + [0.0, floor.offset_y, 0.0]
+        for faces, suffix, inst, layer in zip(split_floor(p, floor.offset_y), ("floor", "rest"),
+                                              (GROUND_INSTANCE, OBJECT_INSTANCE), (Layer.GROUND, Layer.OBJECT)):
+            if faces.any():
+                used = np.unique(p.faces[faces])
+                remap = np.full(len(lifted), -1)
+                remap[used] = np.arange(len(used))
+                scene.add_mesh(f"{p.name}_{suffix}", lifted[used], remap[p.faces[faces]],
+                               uv=None if p.uv is None else p.uv[used], material=p.material, instance=inst,
+                               layer=int(layer))
+
+
+DOME_KEEP = 0.7   # cameras stay within a square of this share of a backdrop's radius (corners inside it)
+
+
+def keep_out_boxes(env: Environment) -> np.ndarray:
+    """Boxes (N, 6) no camera may enter: around a backdrop's ground disc (a camera past it would
+    see its edge and the dome from outside); under a mesh environment's ceilings and past its
+    bounds. None for the others."""
+    if env.mesh is not None:
+        return mesh_floor(env)[1].keep_out
+    if env.backdrop is None:
+        return np.zeros((0, 6))
+    cx, cz = (env.area[0] + env.area[2]) / 2, (env.area[1] + env.area[3]) / 2
+    s, far = DOME_KEEP * env.backdrop.radius_m, 1e4
+    return np.array([[cx + s, -far, -far, far, far, far], [-far, -far, -far, cx - s, far, far],
+                     [-far, -far, cz + s, far, far, far], [-far, -far, -far, far, far, cz - s]], np.float64)
 
 
 def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLighting,
                     rng: np.random.Generator) -> None:
-    """Ground, objects (instances 2, 3, ...) and ``lighting`` (from ``sample_lighting``)."""
-    add_ground(scene, env.ground, rng)
+    """Ground, objects (instances 2, 3, ...) and ``lighting`` (from ``sample_lighting``); with a
+    backdrop, the ground is the HDRI's own, projected around the area's centre."""
+    if env.mesh is not None:
+        add_mesh_environment(scene, env)
+    elif env.backdrop is None:
+        add_ground(scene, env.ground, rng)
+    else:
+        centre = ((env.area[0] + env.area[2]) / 2, (env.area[1] + env.area[3]) / 2)
+        add_backdrop(scene, lighting, env.backdrop.height_m, env.backdrop.radius_m, centre, env.backdrop.key_light)
     for i, obj in enumerate(env.objects):
         for k, (mesh, colour) in enumerate(object_parts(obj)):
             mat = Material(base_color=colour, kind="principled", roughness=obj.roughness)
             scene.add_mesh(f"object{i}_{obj.kind}_{k}", mesh.vertices, mesh.faces, material=mat,
                            instance=OBJECT_INSTANCE + i, layer=int(Layer.OBJECT))
-    scene.set_environment(lighting.emitter())
+    if env.backdrop is None:
+        scene.set_environment(lighting.emitter())

@@ -22,6 +22,7 @@ from synmitsuba.engine.rays import camera_rays
 from synmitsuba.engine.settings import DENOISERS
 from synmitsuba.engine.settings import choose_sampler
 from synmitsuba.rendering.denoise import guides, oidn
+from synmitsuba.rendering.dome import on_dome
 from synmitsuba.engine.variant import require_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
@@ -95,16 +96,17 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
         raise ConfigError("rgb", f"array{np.shape(rgb)}", f"give ({camera.height}, {camera.width}, 3): the camera's image")
     extra = {}
     t_rgb = time.perf_counter()
+    passes = exact_passes(built, camera)
+    passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed, exact=passes)
+    rgb = on_dome(rgb, scene.environment, camera, passes["alpha"])
+    t2 = time.perf_counter()
     if denoise == "oidn":
         aux = guides(built.mi_scene, sensor_dict, seed) if denoise_guides is None else denoise_guides
         extra["rgb_noisy"], rgb = rgb, oidn(rgb, *aux)
-    t2 = time.perf_counter()
-    passes = exact_passes(built, camera)
-    passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed, exact=passes)
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
             "variant": variant, "rfilter": rfilter, "sampler": chosen, "denoise": denoise}
-    timings = {"build": t1 - t0, "rgb": t_rgb - t1, "denoise": t2 - t_rgb, "exact": t3 - t2}
+    timings = {"build": t1 - t0, "rgb": t_rgb - t1, "exact": t2 - t_rgb, "denoise": t3 - t2}
     cov = passes.pop("coverage")
     if not passes["mask"].any():
         warnings.warn(SynMitsubaWarning("the camera sees no geometry: every pixel is background; check the "

@@ -198,11 +198,14 @@ class SunSky:
 @dataclass
 class EnvMap:
     """An equirectangular HDR environment (EXR/HDR file or (H, W, 3) array), y up; negative
-    pixels of lossy files are clamped to 0. ``rotation_deg`` turns it about the y axis."""
+    pixels of lossy files are clamped to 0. ``rotation_deg`` turns it about the y axis. With a
+    ``dome`` (``scene.panorama.Dome``), pixels that see the background show the panorama as
+    projected on that dome (a ground-projected HDRI's walls), not at infinity."""
 
     source: object = None
     scale: float = 1.0
     rotation_deg: float = 0.0
+    dome: object = None   # a scene.panorama.Dome: the camera sees the panorama on it (lighting stays at infinity)
 
     def __post_init__(self):
         if isinstance(self.source, np.ndarray):
