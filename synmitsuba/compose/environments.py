@@ -9,6 +9,7 @@ and the drawn lighting into a ``Scene``. Objects are boxes to placement and came
 from __future__ import annotations
 
 import dataclasses
+import functools
 import glob
 import os
 from dataclasses import dataclass, field
@@ -16,6 +17,7 @@ import numpy as np
 
 from synmitsuba.compose.instances import GROUND_INSTANCE, OBJECT_INSTANCE
 from synmitsuba.errors import ConfigError
+from synmitsuba.compose.architecture import BUILDERS, LAYOUTS, ROLES, chamfer_box
 from synmitsuba.compose.backdrop import add_backdrop
 from synmitsuba.compose.grounds import GROUND_MATERIALS, ground_material
 from synmitsuba.geometry import ground_grid
@@ -65,27 +67,40 @@ def _steps(w, h, d, n=3):
     return [(_box(w, h * (k + 1) / n, d * (n - k) / n, z=-d / 2 + d * (n - k) / (2 * n)), "main") for k in range(n)]
 
 
-OBJECT_KINDS: dict = {  # kind -> (builder(w, h, d) -> [(trimesh, colour role)], default size w, h, d)
-    "box": (lambda w, h, d: [(_box(w, h, d), "main")], (0.6, 0.6, 0.6)),
-    "wall": (lambda w, h, d: [(_box(w, h, d), "main")], (4.0, 2.5, 0.2)),
-    "pillar": (lambda w, h, d: [(_cylinder(w / 2, h), "main")], (0.5, 3.0, 0.5)),
-    "bench": (_bench, (1.6, 0.45, 0.45)),
-    "planter": (_planter, (0.8, 0.9, 0.8)),
-    "tree": (_tree, (1.6, 3.5, 1.6)),
-    "steps": (_steps, (2.0, 0.45, 1.2)),
+OBJECT_KINDS: dict = {  # kind -> (builder(w, h, d, rng) -> [(trimesh, role)], default size w, h, d)
+    "box": (lambda w, h, d, rng: [(chamfer_box(w, h, d, 0.01), "main")], (0.6, 0.6, 0.6)),
+    "wall": (lambda w, h, d, rng: [(_box(w, h, d), "main")], (4.0, 2.5, 0.2)),
+    "pillar": (lambda w, h, d, rng: [(_cylinder(w / 2, h), "main")], (0.5, 3.0, 0.5)),
+    "bench": (lambda w, h, d, rng: _bench(w, h, d), (1.6, 0.45, 0.45)),
+    "planter": (lambda w, h, d, rng: _planter(w, h, d), (0.8, 0.9, 0.8)),
+    "tree": (lambda w, h, d, rng: _tree(w, h, d), (1.6, 3.5, 1.6)),
+    "steps": (lambda w, h, d, rng: _steps(w, h, d), (2.0, 0.45, 1.2)),
+    **BUILDERS,
 }
-ROLE_COLOURS = {"dark": (0.05, 0.05, 0.05), "trunk": (0.12, 0.07, 0.04), "leaf": (0.05, 0.18, 0.04)}
 
 
 @dataclass
 class EnvObject(Params):
-    kind: str = spec(check=Choice(OBJECT_KINDS), doc="box, wall, pillar, bench, planter, tree or steps")
+    kind: str = spec(check=Choice(OBJECT_KINDS), doc=", ".join(OBJECT_KINDS))
     position: list = spec(factory=lambda: [0.0, 0.0], check=Vector(2, what="x, z metres on the ground"))
     yaw_deg: float = spec(0.0, Number(-360, 360))
-    size: list | None = spec(None, optional(Vector(3, 0.01, 50, what="width, height, depth metres")),
+    size: list | None = spec(None, optional(Vector(3, 0.01, 500, what="width, height, depth metres")),
                              doc="default: the kind's own")
     color: list = spec(factory=lambda: [0.5, 0.5, 0.5], check=Vector(3, 0, 1, what="linear RGB"))
     roughness: float = spec(0.7, Number(0, 1))
+    texture: str | None = spec(None, optional(Choice(GROUND_MATERIALS)), doc="a ground material on its main parts "
+                               "(bricks, plaster, wood), laid on by box projection at real scale")
+    lift: float = spec(0.0, Number(-50, 50), doc="metres it stands above the ground (a wall above a door)")
+    seed: int = spec(0, Number(0, 2 ** 31, integer=True), doc="draws the builder's details (windows, books, leaves)")
+
+
+@dataclass
+class Layout(Params):
+    """A procedural layout (``architecture.LAYOUTS``) whose objects join the environment's."""
+
+    kind: str = spec(check=Choice(LAYOUTS), doc=", ".join(LAYOUTS))
+    size_m: float = spec(30.0, Number(4, 500), doc="across (a room) or along (a street, a park)")
+    seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
 
 @dataclass
@@ -134,6 +149,7 @@ class Environment(Params):
     mesh: str | None = spec(None, optional(Text()), doc="your own scene: a glTF/GLB, OBJ or PLY file (relative to "
                             "this file; y up), its floor found by ray casting; area and ground then come from it")
     mesh_scale: float = spec(1.0, Number(1e-4, 1e4), doc="metres per mesh unit")
+    layout: Layout | None = spec(None, optional(Nested(Layout)), doc="objects and area drawn by a layout")
     backdrop: Backdrop | None = spec(None, optional(Nested(Backdrop)),
                                      doc="an envmap's photo as the ground, catching shadows (BEDLAM's HDRI scenes)")
     path: str = field(default="", metadata={"doc": "the file it came from"})
@@ -172,6 +188,12 @@ def load_environment(name_or_path: str, where: str = "environment") -> Environme
     env.path = os.path.abspath(path)
     if env.mesh is not None:
         env.area = mesh_floor(env, where)[1].area
+    if env.layout is not None:
+        area, objects = LAYOUTS[env.layout.kind](env.layout.size_m, np.random.default_rng(env.layout.seed))
+        seeds = np.random.default_rng(env.layout.seed + 1).integers(2 ** 31, size=len(objects))
+        env.area = area
+        env.objects = env.objects + [EnvObject.from_dict({**o, "seed": int(k)}, f"{where}.layout.objects[{i}]")
+                                     for i, (o, k) in enumerate(zip(objects, seeds))]
     if env.lighting.type == "envmap":
         hdri = os.path.join(os.path.dirname(env.path), env.lighting.file or "")
         if not os.path.isfile(hdri):
@@ -247,15 +269,29 @@ def add_ground(scene, ground: Ground, rng: np.random.Generator) -> None:
 
 # -- objects in a scene -------------------------------------------------------------------
 def object_parts(obj: EnvObject) -> list:
-    """World-space (trimesh, linear RGB) parts of one object."""
+    """World-space (trimesh, role) parts of one object (``architecture.ROLES``; ``main`` is its
+    own colour), built once per object."""
+    key = (obj.kind, tuple(obj.position), obj.yaw_deg, tuple(obj.size or ()), obj.lift, obj.seed)
+    return _parts(key)
+
+
+@functools.lru_cache(maxsize=4096)
+def _parts(key: tuple) -> list:
     from synmitsuba.geometry import axis_rotation
-    builder, default = OBJECT_KINDS[obj.kind]
-    w, h, d = obj.size or default
+    kind, position, yaw, size, lift, seed = key
+    builder, default = OBJECT_KINDS[kind]
+    w, h, d = size or default
     M = np.eye(4)
-    M[:3, :3] = axis_rotation("y", np.radians(obj.yaw_deg))
-    M[:3, 3] = [obj.position[0], 0.0, obj.position[1]]
-    return [(mesh.apply_transform(M), tuple(obj.color) if role == "main" else ROLE_COLOURS[role])
-            for mesh, role in builder(w, h, d)]
+    M[:3, :3] = axis_rotation("y", np.radians(yaw))
+    M[:3, 3] = [position[0], lift, position[1]]
+    return [(mesh.apply_transform(M), role) for mesh, role in builder(w, h, d, np.random.default_rng(seed))]
+
+
+def _box_uv(mesh) -> np.ndarray:
+    """Metres along the two axes across each vertex's dominant normal axis (box projection)."""
+    v, n = np.asarray(mesh.vertices), np.abs(np.asarray(mesh.vertex_normals))
+    axis = n.argmax(1)
+    return np.where((axis == 0)[:, None], v[:, [2, 1]], np.where((axis == 1)[:, None], v[:, [0, 2]], v[:, [0, 1]]))
 
 
 def object_boxes(env: Environment) -> np.ndarray:
@@ -263,7 +299,7 @@ def object_boxes(env: Environment) -> np.ndarray:
     of a mesh environment's obstacles, in floor cells)."""
     boxes = []
     for obj in env.objects:
-        pts = np.concatenate([m.vertices for m, _ in object_parts(obj)])
+        pts = np.concatenate([np.asarray(m.vertices) for m, _ in object_parts(obj)])
         boxes.append(np.concatenate([pts.min(0), pts.max(0)]))
     out = np.asarray(boxes, np.float64).reshape(-1, 6)
     return out if env.mesh is None else np.concatenate([out, mesh_floor(env)[1].obstacles])
@@ -325,10 +361,22 @@ def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLi
     else:
         centre = ((env.area[0] + env.area[2]) / 2, (env.area[1] + env.area[3]) / 2)
         add_backdrop(scene, lighting, env.backdrop.height_m, env.backdrop.radius_m, centre, env.backdrop.key_light)
+    textured: dict = {}   # (material kind, colour) -> (Blend, period): one texture per look
     for i, obj in enumerate(env.objects):
-        for k, (mesh, colour) in enumerate(object_parts(obj)):
-            mat = Material(base_color=colour, kind="principled", roughness=obj.roughness)
-            scene.add_mesh(f"object{i}_{obj.kind}_{k}", mesh.vertices, mesh.faces, material=mat,
+        for k, (mesh, role) in enumerate(object_parts(obj)):
+            uv = None
+            if role == "main" and obj.texture is not None:
+                look = (obj.texture, tuple(obj.color))
+                if look not in textured:
+                    textured[look] = ground_material(obj.texture, obj.color, np.random.default_rng(obj.seed), n=512)
+                mat, period = textured[look]
+                uv = _box_uv(mesh) / period
+            elif role == "main":
+                mat = Material(base_color=tuple(obj.color), kind="principled", roughness=obj.roughness)
+            else:
+                colour, rough, metal = ROLES[role]
+                mat = Material(base_color=colour, kind="principled", roughness=rough, metallic=metal)
+            scene.add_mesh(f"object{i}_{obj.kind}_{k}", mesh.vertices, mesh.faces, uv=uv, material=mat,
                            instance=OBJECT_INSTANCE + i, layer=int(Layer.OBJECT))
     if env.backdrop is None:
         scene.set_environment(lighting.emitter())

@@ -1,0 +1,70 @@
+"""Procedural architecture and props: what each layout builds, at what size, from its seed."""
+import numpy as np
+import pytest
+
+import synmitsuba as sm
+from synmitsuba.compose import architecture, environments
+
+
+def _inside_convex(mesh, p) -> bool:
+    """Inside a convex mesh: behind every face's plane (outward normals)."""
+    v0 = mesh.vertices[mesh.faces[:, 0]]
+    return bool((np.einsum("fk,fk->f", np.asarray(p, float) - v0, mesh.face_normals) < 0).all())
+
+
+def test_chamfered_box_keeps_its_size_and_bevels_its_edges():
+    m = architecture.chamfer_box(1.2, 0.8, 0.5, bevel=0.02)
+    assert np.allclose(m.bounds, [[-0.6, 0.0, -0.25], [0.6, 0.8, 0.25]])
+    assert m.is_watertight and len(m.vertices) == 24            # 8 corners, each cut into 3
+    # a corner is cut: the box's corner point lies outside the solid
+    assert not _inside_convex(m, [0.599, 0.799, 0.249]) and _inside_convex(m, [0.55, 0.75, 0.2])
+
+
+@pytest.mark.parametrize("name, kinds, least_m", [
+    ("city_street", {"building", "lamp", "bollard", "kerb", "bench"}, 30.0),
+    ("city_park", {"tree2", "bush", "bench"}, 30.0),
+    ("living_room", {"wall", "sofa", "table", "chair", "shelf"}, 8.0)])
+def test_layouts_build_their_places(name, kinds, least_m):
+    env = environments.load_environment(name)
+    assert kinds <= {o.kind for o in env.objects}
+    boxes = environments.object_boxes(env)
+    span = boxes[:, [3, 5]].max(0) - boxes[:, [0, 2]].min(0)
+    assert span.min() >= least_m, span
+    again = environments.load_environment(name)
+    assert [o.to_dict() for o in again.objects] == [o.to_dict() for o in env.objects]   # from the seed
+
+
+def test_facades_have_windows_and_a_door_and_trees_have_branches_and_leaves():
+    rng = np.random.default_rng(0)
+    roles = [r for _, r in architecture.building(12.0, 9.6, 8.0, rng)]
+    floors, cols = 3, 5
+    assert roles.count("glass") == floors * cols - 1 and roles.count("door") == 1
+    parts = architecture.tree(3.0, 6.0, 3.0, np.random.default_rng(1))
+    assert sum(r == "trunk" for _, r in parts) >= 1 + 5 * 4           # trunk, branches, twigs
+    leaves = sum(len(m.faces) for m, r in parts if r.startswith("leaf")) // 2
+    assert leaves > 5000
+
+
+def test_room_walls_leave_a_door_and_windows_open():
+    env = environments.load_environment("living_room")
+    walls = [o for o in env.objects if o.kind == "wall"]
+    lifted = [o for o in walls if o.lift > 0]                         # pieces over the openings
+    assert len(lifted) == 1 + 2 * 3                                   # one door, two windows on three walls
+    door = [o for o in lifted if abs(o.lift - 2.1) < 1e-9]                # a 2.1 m door; windows reach 2.3 m
+    assert len(door) == 1
+    x, z = door[0].position
+    # at the door's middle, 1 m up, no wall piece stands
+    for o in walls:
+        (mesh, _), = environments.object_parts(o)
+        assert not _inside_convex(mesh, [x, 1.0, z])
+
+
+def test_people_are_placed_on_a_street_clear_of_its_objects():
+    cfg = {"environments": ["city_street"], "subjects": {"count": 3, "seconds": 0.5},
+           "cameras": {"count": 2, "width": 64, "height": 48}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(1), seed=1)
+    boxes = environments.object_boxes(environments.load_environment("city_street"))
+    for s in spec.subjects:
+        x, z = s.position[0], s.position[-1]
+        assert not ((boxes[:, 0] < x) & (x < boxes[:, 3]) & (boxes[:, 2] < z) & (z < boxes[:, 5])).any()
+    assert len(spec.views) == 2
