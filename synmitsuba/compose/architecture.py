@@ -4,10 +4,12 @@ street, a room or a park of 30 m and more with them from a seed.
 
 Every builder takes (w, h, d, rng) and returns [(trimesh, role)] in the object's frame (ground
 at y = 0, centred on x and z); a role is ``main`` (the object's colour) or one of ``ROLES``.
-A layout is ``(size_m, rng) -> (area, [object dict])`` whose dicts are ``EnvObject``s.
+A layout is ``(size_m, rng) -> Place``: the area people stand in, ``EnvObject`` dicts, boxes no
+camera may enter (outside a room, over its ceiling) and ceiling lights.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -16,7 +18,7 @@ import numpy as np
 ROLES: dict[str, tuple] = {
     "dark": ((0.05, 0.05, 0.05), 0.6, 0.0), "trunk": ((0.12, 0.07, 0.04), 0.9, 0.0),
     "leaf": ((0.05, 0.18, 0.04), 0.7, 0.0), "leaf2": ((0.09, 0.2, 0.03), 0.7, 0.0),
-    "glass": ((0.02, 0.025, 0.03), 0.05, 0.0), "frame": ((0.7, 0.7, 0.68), 0.4, 0.0),
+    "glass": ((0.03, 0.04, 0.05), 0.02, 0.0), "frame": ((0.7, 0.7, 0.68), 0.4, 0.0),
     "metal": ((0.08, 0.08, 0.09), 0.35, 1.0), "light": ((0.9, 0.85, 0.7), 0.2, 0.0),
     "wood": ((0.3, 0.17, 0.08), 0.5, 0.0), "fabric": ((0.25, 0.25, 0.28), 0.95, 0.0),
     "door": ((0.2, 0.1, 0.05), 0.5, 0.0), "stone": ((0.45, 0.44, 0.42), 0.8, 0.0),
@@ -195,6 +197,18 @@ BUILDERS: dict[str, tuple[Callable, tuple]] = {   # kind -> (builder, default w,
 
 
 # -- layouts ----------------------------------------------------------------------------------
+@dataclass
+class Place:
+    """What a layout draws: ``area`` (x_min, z_min, x_max, z_max), ``objects`` (EnvObject dicts),
+    ``keep_out`` (boxes (x0, y0, z0, x1, y1, z1) no camera enters), ``lights`` (dicts of
+    ``AreaLight`` fields: position, target, size, radiance)."""
+
+    area: list
+    objects: list
+    keep_out: list = field(default_factory=list)
+    lights: list = field(default_factory=list)
+
+
 def _obj(kind, x, z, yaw=0.0, size=None, color=(0.5, 0.5, 0.5), roughness=0.7, **extra) -> dict:
     d = {"kind": kind, "position": [float(x), float(z)], "yaw_deg": float(yaw), "color": [float(c) for c in color],
          "roughness": float(roughness), **extra}
@@ -206,7 +220,7 @@ def _obj(kind, x, z, yaw=0.0, size=None, color=(0.5, 0.5, 0.5), roughness=0.7, *
 FACADES = [(0.55, 0.35, 0.25), (0.62, 0.58, 0.5), (0.4, 0.38, 0.36), (0.7, 0.66, 0.58), (0.35, 0.22, 0.16)]
 
 
-def street(size: float, rng) -> tuple[list, list]:
+def street(size: float, rng) -> Place:
     """A street ``size`` long: facades of drawn widths and heights on both sides behind raised
     pavements, lamps, bollards and benches along the kerbs. People walk the carriageway."""
     half, road, walk = size / 2, 4.0, 3.0
@@ -227,10 +241,14 @@ def street(size: float, rng) -> tuple[list, list]:
             objs.append(_obj("bollard", side * (road + 0.3), zz + 3.0, 0, None, (0.15, 0.15, 0.16), 0.4))
             if k % 2:
                 objs.append(_obj("bench", side * (road + walk - 0.6), zz + 1.5, 90 * side, None, (0.35, 0.2, 0.1)))
-    return [-road + 0.5, -half, road - 0.5, half], objs
+    for end in (-1, 1):   # the street ends in a facade across it, not in an empty plain
+        w = 2 * (road + walk + 8.0)
+        objs.append(_obj("building", 0, end * (half + 18.0), 90 + 90 * end, (w, 12.6, 8.0),
+                         FACADES[int(rng.integers(len(FACADES)))], 0.85, texture="paving"))
+    return Place([-road + 0.5, -half, road - 0.5, half], objs)
 
 
-def room(size: float, rng) -> tuple[list, list]:
+def room(size: float, rng) -> Place:
     """A room ``size`` across: walls with a door and windows (wall pieces around the openings),
     a sofa, a table with chairs, shelves, along the walls; the middle left free."""
     half, t, h = size / 2, 0.2, 2.8
@@ -242,22 +260,30 @@ def room(size: float, rng) -> tuple[list, list]:
             [(float(x), 1.4, 0.9, 1.4) for x in np.linspace(-half / 2, half / 2, 2)]
         edges = [-half - t] + [v for o in sorted(openings) for v in (o[0] - o[1] / 2, o[0] + o[1] / 2)] + [half + t]
         for a, b in zip(edges[::2], edges[1::2]):
-            objs.append(_obj("wall", cx + ox * (a + b) / 2, cz + oz * (a + b) / 2, yaw, (b - a, h, t), wall, 0.9))
+            objs.append(_obj("wall", cx + ox * (a + b) / 2, cz + oz * (a + b) / 2, yaw, (b - a, h, t), wall, 0.9,
+                             texture="plaster"))
         for x, ow, sill, oh in openings:
             if sill > 0:
-                objs.append(_obj("wall", cx + ox * x, cz + oz * x, yaw, (ow, sill, t), wall, 0.9))
+                objs.append(_obj("wall", cx + ox * x, cz + oz * x, yaw, (ow, sill, t), wall, 0.9, texture="plaster"))
             top = sill + oh
-            objs.append(_obj("wall", cx + ox * x, cz + oz * x, yaw, (ow, h - top, t), wall, 0.9, lift=top))
+            objs.append(_obj("wall", cx + ox * x, cz + oz * x, yaw, (ow, h - top, t), wall, 0.9, lift=top,
+                             texture="plaster"))
     objs += [_obj("sofa", 0, -half + 0.7, 0, None, (0.3, 0.32, 0.36), 0.95),
-             _obj("table", -half + 1.4, half - 1.6, 0, None, (0.35, 0.2, 0.1), 0.5),
+             _obj("table", -half + 1.4, half - 1.6, 0, None, (0.35, 0.2, 0.1), 0.5, texture="wood"),
              *[_obj("chair", -half + 1.4 + dx, half - 1.6 + dz, yaw, None, (0.35, 0.2, 0.1), 0.5)
                for dx, dz, yaw in ((0, -0.65, 0), (0, 0.65, 180))],
-             *[_obj("shelf", half - 0.3, z, -90, None, (0.5, 0.42, 0.32), 0.6) for z in (-1.2, 0.0)]]
-    inner = half - 1.6
-    return [-inner, -inner, inner, inner], objs
+             *[_obj("shelf", half - 0.3, z, -90, None, (0.5, 0.42, 0.32), 0.6, texture="wood") for z in (-1.2, 0.0)],
+             _obj("box", 0, 0, 0, (size + 2 * t, 0.15, size + 2 * t), wall, 0.9, lift=h, obstacle=False)]  # ceiling
+    inner, far, wall_in = half - 1.6, 1e4, half - 0.3
+    keep_out = [[wall_in, -far, -far, far, far, far], [-far, -far, -far, -wall_in, far, far],
+                [-far, -far, wall_in, far, far, far], [-far, -far, -far, far, far, -wall_in],
+                [-far, h - 0.2, -far, far, far, far]]
+    lights = [{"position": [0.0, h - 0.01, z], "target": [0.0, 0.0, z], "size": [1.2, 0.6], "radiance": 12.0}
+              for z in (-half / 3, half / 3)]
+    return Place([-inner, -inner, inner, inner], objs, keep_out, lights)
 
 
-def park(size: float, rng) -> tuple[list, list]:
+def park(size: float, rng) -> Place:
     """A park ``size`` across: trees and bushes scattered around a lawn, benches facing it."""
     half, objs = size / 2, list[dict]()
     while len(objs) < int(size * 0.7):
@@ -272,7 +298,7 @@ def park(size: float, rng) -> tuple[list, list]:
         a = np.pi / 2 * k + 0.4
         yaw = (-np.degrees(a) - 90 + 180) % 360 - 180
         objs.append(_obj("bench", 6.0 * np.cos(a), 6.0 * np.sin(a), yaw, None, (0.35, 0.2, 0.1)))
-    return [-5.0, -5.0, 5.0, 5.0], objs
+    return Place([-5.0, -5.0, 5.0, 5.0], objs)
 
 
 LAYOUTS: dict[str, Callable] = {"street": street, "room": room, "park": park}

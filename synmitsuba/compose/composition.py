@@ -133,7 +133,8 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
     count = sc.count if isinstance(sc.count, int) else int(rng.integers(int(sc.count[0]), int(sc.count[1]) + 1))
     reach = cams.frame_reach(cfg.cameras) if cfg.cameras.mode == "shell" else np.inf
     drafts = [_draft(sc, sources, cfg.base, i, rng, reach) for i in range(count)]
-    boxes = np.concatenate([object_boxes(env), keep_out_boxes(env)])  # objects, and where no camera may go
+    boxes = object_boxes(env)
+    camera_boxes = np.concatenate([boxes, keep_out_boxes(env)])  # and where no camera may go (over a ceiling)
 
     def composed(shrink: float, least: int) -> SceneSpec:  # cams.NoViewFits: fewer than least views fit
         placing = cfg if shrink == 1.0 else replace(
@@ -144,7 +145,7 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
         spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, _subject_specs(placed, placements, env), [],
                           len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
         spec_.build([d.human for d in placed])
-        spec_.views, spec_.scored_frames = _views(spec_, boxes, cfg.cameras, rng, cfg.occlusion, least)
+        spec_.views, spec_.scored_frames = _views(spec_, camera_boxes, cfg.cameras, rng, cfg.occlusion, least)
         _direct(spec_, rng)
         return spec_
     for redraw in range(MOTION_REDRAWS + 1):

@@ -24,7 +24,7 @@ from synmitsuba.geometry import ground_grid
 from synmitsuba.resources import asset_path
 from synmitsuba.schema import Choice, Flag, ListOf, Nested, Number, Params, Range, Text, Vector, optional, spec
 from synmitsuba.scene.layers import Layer
-from synmitsuba.scene.materials import EnvMap, Material, SunSky
+from synmitsuba.scene.materials import AreaLight, EnvMap, Material, SunSky
 
 SCENES_DIR = asset_path("scenes")  # package data: works from a wheel as from a checkout
 ENV_DIR = os.path.join(SCENES_DIR, "environments")
@@ -92,6 +92,18 @@ class EnvObject(Params):
                                "(bricks, plaster, wood), laid on by box projection at real scale")
     lift: float = spec(0.0, Number(-50, 50), doc="metres it stands above the ground (a wall above a door)")
     seed: int = spec(0, Number(0, 2 ** 31, integer=True), doc="draws the builder's details (windows, books, leaves)")
+    obstacle: bool = spec(True, Flag(), doc="false: people and cameras ignore it (a ceiling; keep cameras under it "
+                          "with camera_keep_out)")
+
+
+@dataclass
+class PanelLight(Params):
+    """A one-sided rectangular area light at ``position`` facing ``target``."""
+
+    position: list = spec(check=Vector(3, what="x, y, z metres"))
+    target: list = spec(check=Vector(3, what="x, y, z metres"))
+    size: list = spec(factory=lambda: [1.0, 1.0], check=Vector(2, 0.01, 100, what="width, height metres"))
+    radiance: float = spec(10.0, Number(0, 1e6))
 
 
 @dataclass
@@ -150,6 +162,9 @@ class Environment(Params):
                             "this file; y up), its floor found by ray casting; area and ground then come from it")
     mesh_scale: float = spec(1.0, Number(1e-4, 1e4), doc="metres per mesh unit")
     layout: Layout | None = spec(None, optional(Nested(Layout)), doc="objects and area drawn by a layout")
+    lights: list = spec(factory=list, check=ListOf(Nested(PanelLight)), doc="ceiling panels and other area lights")
+    camera_keep_out: list = spec(factory=list, check=ListOf(Vector(6, what="x0, y0, z0, x1, y1, z1 metres")),
+                                 doc="boxes no camera may enter (outside a room, above its ceiling)")
     backdrop: Backdrop | None = spec(None, optional(Nested(Backdrop)),
                                      doc="an envmap's photo as the ground, catching shadows (BEDLAM's HDRI scenes)")
     path: str = field(default="", metadata={"doc": "the file it came from"})
@@ -189,11 +204,13 @@ def load_environment(name_or_path: str, where: str = "environment") -> Environme
     if env.mesh is not None:
         env.area = mesh_floor(env, where)[1].area
     if env.layout is not None:
-        area, objects = LAYOUTS[env.layout.kind](env.layout.size_m, np.random.default_rng(env.layout.seed))
-        seeds = np.random.default_rng(env.layout.seed + 1).integers(2 ** 31, size=len(objects))
-        env.area = area
+        place = LAYOUTS[env.layout.kind](env.layout.size_m, np.random.default_rng(env.layout.seed))
+        seeds = np.random.default_rng(env.layout.seed + 1).integers(2 ** 31, size=len(place.objects))
+        env.area = place.area
         env.objects = env.objects + [EnvObject.from_dict({**o, "seed": int(k)}, f"{where}.layout.objects[{i}]")
-                                     for i, (o, k) in enumerate(zip(objects, seeds))]
+                                     for i, (o, k) in enumerate(zip(place.objects, seeds))]
+        env.camera_keep_out = env.camera_keep_out + place.keep_out
+        env.lights = env.lights + [PanelLight.from_dict(d, f"{where}.layout.lights[{i}]") for i, d in enumerate(place.lights)]
     if env.lighting.type == "envmap":
         hdri = os.path.join(os.path.dirname(env.path), env.lighting.file or "")
         if not os.path.isfile(hdri):
@@ -298,7 +315,7 @@ def object_boxes(env: Environment) -> np.ndarray:
     """(N, 6) world bounds ``(x_min, y_min, z_min, x_max, y_max, z_max)`` of every object (and
     of a mesh environment's obstacles, in floor cells)."""
     boxes = []
-    for obj in env.objects:
+    for obj in (o for o in env.objects if o.obstacle):
         pts = np.concatenate([np.asarray(m.vertices) for m, _ in object_parts(obj)])
         boxes.append(np.concatenate([pts.min(0), pts.max(0)]))
     out = np.asarray(boxes, np.float64).reshape(-1, 6)
@@ -340,14 +357,15 @@ def keep_out_boxes(env: Environment) -> np.ndarray:
     """Boxes (N, 6) no camera may enter: around a backdrop's ground disc (a camera past it would
     see its edge and the dome from outside); under a mesh environment's ceilings and past its
     bounds. None for the others."""
+    own = np.asarray(env.camera_keep_out, np.float64).reshape(-1, 6)
     if env.mesh is not None:
-        return mesh_floor(env)[1].keep_out
+        return np.concatenate([own, mesh_floor(env)[1].keep_out])
     if env.backdrop is None:
-        return np.zeros((0, 6))
+        return own
     cx, cz = (env.area[0] + env.area[2]) / 2, (env.area[1] + env.area[3]) / 2
     s, far = DOME_KEEP * env.backdrop.radius_m, 1e4
-    return np.array([[cx + s, -far, -far, far, far, far], [-far, -far, -far, cx - s, far, far],
-                     [-far, -far, cz + s, far, far, far], [-far, -far, -far, far, far, cz - s]], np.float64)
+    return np.concatenate([own, [[cx + s, -far, -far, far, far, far], [-far, -far, -far, cx - s, far, far],
+                                 [-far, -far, cz + s, far, far, far], [-far, -far, -far, far, far, cz - s]]])
 
 
 def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLighting,
@@ -380,3 +398,5 @@ def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLi
                            instance=OBJECT_INSTANCE + i, layer=int(Layer.OBJECT))
     if env.backdrop is None:
         scene.set_environment(lighting.emitter())
+    for light in env.lights:
+        scene.add_light(AreaLight(tuple(light.position), tuple(light.target), tuple(light.size), light.radiance))

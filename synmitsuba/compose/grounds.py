@@ -183,6 +183,12 @@ def _carpet(base, layout, tone, n, period):
     return GroundMaps(_rgb(base, shade[..., None]), height, np.full((n, n), 0.98), period)
 
 
+def _plaster(base, layout, tone, n, period):
+    trowel, grain = periodic_noise(tone, n, 0.9), periodic_noise(tone, n, 0.0)
+    shade = 1 + 0.035 * trowel + 0.02 * grain
+    return GroundMaps(_rgb(base, shade[..., None]), 0.0004 * trowel + 0.0001 * grain, np.full((n, n), 0.9), period)
+
+
 def _tiles(base, layout, tone, n, period):
     k = max(int(round(period / 0.6)), 1)                    # 60 cm tiles, 3 mm grout
     ids, dist = _bricks(n, k, k, np.zeros(k), 0.005)
@@ -204,6 +210,7 @@ GROUND_MATERIALS: dict[str, GroundKind] = {
     "gravel": GroundKind(_gravel, 2.0, (0.8, 0.8, 0.8), "loose stones about 3 cm across"),
     "wood": GroundKind(_wood, 3.6, (0.85, 0.82, 0.8), "15 cm floor planks, 1.2 m long, staggered"),
     "carpet": GroundKind(_carpet, 1.0, (0.88, 0.88, 0.88), "short-pile carpet", structured=False),
+    "plaster": GroundKind(_plaster, 2.0, (0.95, 0.94, 0.92), "painted plaster for walls", structured=False),
     "tiles": GroundKind(_tiles, 2.4, (0.9, 0.89, 0.87), "60 cm glazed floor tiles with grout"),
 }
 
