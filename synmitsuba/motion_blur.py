@@ -105,27 +105,30 @@ def exposure_motion(scene, keys: _Keys, cameras: list, frame: int, times: list) 
 @dataclass
 class Exposure:
     """A view's motion-blurred frame: the RGB, the denoising guides averaged like it (with
-    ``denoise="oidn"``), and the blur vectors (``exposure_motion``, when asked for)."""
+    ``denoise="oidn"``), the blur vectors (``exposure_motion``, when asked for) and the
+    sub-frame cameras (what an HDRI dome behind the people is averaged over)."""
 
     rgb: np.ndarray | None
     guides: tuple | None = None
     motion: np.ndarray | None = None
+    cameras: list | None = None
 
 
 class _Accumulator:
     """Sample-weighted sums of a view's sub-frame images."""
 
     def __init__(self):
-        self.rgb, self.albedo, self.normal = 0.0, 0.0, 0.0
+        self.rgb, self.albedo, self.normal, self.cameras = 0.0, 0.0, 0.0, []
 
-    def add(self, weight: float, rgb: np.ndarray, aux: tuple | None, aux_weight: float) -> None:
+    def add(self, weight: float, rgb: np.ndarray, aux: tuple | None, aux_weight: float, camera) -> None:
         self.rgb = self.rgb + weight * rgb.astype(np.float64)
+        self.cameras.append(camera)
         if aux is not None:
             self.albedo, self.normal = self.albedo + aux_weight * aux[0], self.normal + aux_weight * aux[1]
 
     def exposure(self, with_guides: bool) -> Exposure:
         guides = (np.asarray(self.albedo, np.float32), np.asarray(self.normal, np.float32)) if with_guides else None
-        return Exposure(np.asarray(self.rgb, np.float32), guides)
+        return Exposure(np.asarray(self.rgb, np.float32), guides, cameras=self.cameras)
 
 
 def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, subframes: int, spp: int, seed: int,
@@ -151,9 +154,9 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
             if keys is not None:
                 keys.move(scene, t)
             for v in views:
-                rgb, aux = render_rgb(scene, _camera_at(v.cameras, t), share, subframe_seed(seed + frame, k),
-                                      guide_spp=guide_spp, **args)
-                sums[v.name].add(share / spp, rgb, aux, 1 / n)  # guides: the same spp every sub-frame
+                cam = _camera_at(v.cameras, t)
+                rgb, aux = render_rgb(scene, cam, share, subframe_seed(seed + frame, k), guide_spp=guide_spp, **args)
+                sums[v.name].add(share / spp, rgb, aux, 1 / n, cam)  # guides: the same spp every sub-frame
         out = {name: acc.exposure(denoised) for name, acc in sums.items()}
         if keys is not None:
             keys.restore(scene, 1)  # the frame's own positions, bit for bit

@@ -65,7 +65,7 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
             view = spec.view(name)
             exposure = blurred.get(name, Exposure(None))
             sample = render(scene, view.cameras[f], spp=spp, seed=seed + int(f), rgb=exposure.rgb,
-                            denoise_guides=exposure.guides, **render_args)
+                            denoise_guides=exposure.guides, dome_cameras=exposure.cameras, **render_args)
             if shutter > 0:
                 sample.meta.update(shutter=shutter, subframes=min(subframes, spp))
             _camera_effects(sample, exposure, photo, photo_rng(seed + int(f), names.index(name)))

@@ -62,7 +62,8 @@ def _trace(built, sensor_dict: dict, spp: int, seed: int, max_depth: int) -> np.
 
 def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6,
            coverage_samples: int = 9, rfilter: str = "box", sampler: str = "auto", denoise: str = "none",
-           rgb: np.ndarray | None = None, denoise_guides: tuple | None = None) -> Sample:
+           rgb: np.ndarray | None = None, denoise_guides: tuple | None = None,
+           dome_cameras: list | None = None) -> Sample:
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
     bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``.
     ``sampler``: ``auto`` (the best that keeps spp exactly, see ``render.denoise``) or a Mitsuba
@@ -72,7 +73,9 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     ``rgb``: an RGB traced already (``render_rgb``; motion blur's sub-frame average) to use
     instead of tracing one; the exact passes are this scene's and camera's. ``denoise_guides``:
     the (albedo, normal) that image was traced with (motion blur's: averaged over its sub-frames,
-    so the denoiser does not sharpen what moved), instead of this scene's."""
+    so the denoiser does not sharpen what moved), instead of this scene's. ``dome_cameras``: the
+    cameras that image was traced with (motion blur's sub-frames), over which an HDRI dome seen
+    behind everything is averaged (``rendering.dome``)."""
     spp, max_depth, coverage_samples = (POSITIVE(n, v) for n, v in
                                         (("spp", spp), ("max_depth", max_depth), ("coverage_samples", coverage_samples)))
     seed = Number(0, 2 ** 32 - 1, integer=True)("seed", seed)
@@ -98,7 +101,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     t_rgb = time.perf_counter()
     passes = exact_passes(built, camera)
     passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed, exact=passes)
-    rgb = on_dome(rgb, scene.environment, camera, passes["alpha"])
+    rgb = on_dome(rgb, scene.environment, camera, passes["alpha"], dome_cameras)
     t2 = time.perf_counter()
     if denoise == "oidn":
         aux = guides(built.mi_scene, sensor_dict, seed) if denoise_guides is None else denoise_guides
