@@ -132,7 +132,7 @@ class _Accumulator:
 
 
 def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, subframes: int, spp: int, seed: int,
-                 render_args: dict, motion: bool = False) -> dict[str, Exposure]:
+                 render_args: dict, motion: bool = False, before_view=None) -> dict[str, Exposure]:
     """Each view's motion-blurred ``Exposure`` at ``frame`` (subjects posed there): ``min(subframes,
     spp)`` renders across the exposure, each with its share of ``spp`` (the total stays
     ``spp``), averaged by samples; with ``render_args["denoise"] == "oidn"`` the guides are
@@ -140,7 +140,8 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
     Subjects are posed at the exposure's first and last sub-frame and its centre, and move
     linearly between those keys (``_Keys``); moving cameras are blended per sub-frame. The scene
     is left posed at ``frame`` with its previous positions (flow's) as they were. With
-    ``motion``, each view's ``exposure_motion``."""
+    ``motion``, each view's ``exposure_motion``. ``before_view(view)`` readies the scene for a
+    view before each of its renders (an HDRI backdrop projected from its camera)."""
     n = min(subframes, spp)
     shares = [spp // n + (k < spp % n) for k in range(n)]
     times = subframe_times(frame, shutter, n)
@@ -154,6 +155,8 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
             if keys is not None:
                 keys.move(scene, t)
             for v in views:
+                if before_view is not None:
+                    before_view(v)
                 cam = _camera_at(v.cameras, t)
                 rgb, aux = render_rgb(scene, cam, share, subframe_seed(seed + frame, k), guide_spp=guide_spp, **args)
                 sums[v.name].add(share / spp, rgb, aux, 1 / n, cam)  # guides: the same spp every sub-frame

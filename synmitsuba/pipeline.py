@@ -11,6 +11,7 @@ import numpy as np
 from synmitsuba.annotate.flow import SequenceFlow, flow_targets
 from synmitsuba.annotate.records import Annotator
 from synmitsuba.annotate.smplx_fit import SMPLXOptions, fit_subject
+from synmitsuba.compose.backdrop import centre_backdrop, view_projection_point
 from synmitsuba.compose.spec import SceneSpec
 from synmitsuba.engine.build import settle_frame_memory
 from synmitsuba.errors import ConfigError
@@ -19,6 +20,16 @@ from synmitsuba.rendering.passes import render
 from synmitsuba.schema import POSITIVE, Number
 from synmitsuba.rendering.photo import Photo, develop
 from synmitsuba.seeds import photo_rng
+
+
+def _project(scene, view) -> None:
+    """An HDRI backdrop projected from above the view's camera (``compose.backdrop``)."""
+    centre_backdrop(scene, view_projection_point(view.cameras))
+
+
+def _backdrop_meta(scene) -> dict:
+    dome = getattr(scene.environment, "dome", None)
+    return {} if dome is None else {"backdrop_centre": [float(c) for c in dome.centre]}
 
 
 def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, seed: int = 0, annotate: bool = True,
@@ -60,15 +71,18 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
         for p in placed:
             p.pose_in(scene, int(f))
         blurred = (blurred_rgbs(scene, placed, [spec.view(n) for n in names], int(f), shutter, subframes, spp, seed,
-                                render_args, motion=annotate) if shutter > 0 else {})
+                                render_args, motion=annotate, before_view=lambda v: _project(scene, v))
+                   if shutter > 0 else {})
         for name in names:
             view = spec.view(name)
+            _project(scene, view)
             exposure = blurred.get(name, Exposure(None))
             sample = render(scene, view.cameras[f], spp=spp, seed=seed + int(f), rgb=exposure.rgb,
                             denoise_guides=exposure.guides, dome_cameras=exposure.cameras, **render_args)
             if shutter > 0:
                 sample.meta.update(shutter=shutter, subframes=min(subframes, spp))
             _camera_effects(sample, exposure, photo, photo_rng(seed + int(f), names.index(name)))
+            sample.meta.update(_backdrop_meta(scene))
             sample.meta.update(frame=int(f), view=name, camera_motion=view.kind,
                                subjects=[{"instance": s.instance, "occlusion": float(o), "in_view": float(i),
                                           "valid": bool(v)} for s, o, i, v in

@@ -86,6 +86,44 @@ def test_projected_ground_shows_the_photo_and_catches_shadows():
     assert np.median(ratio[shadowed]) < 0.75, np.median(ratio[shadowed])
 
 
+def _photo_over(cam, lighting, mask, point) -> np.ndarray:
+    """The panorama over each masked pixel (16 sub-pixel rays, box filter) as seen from the
+    projection ``point``: the ray's ground point looked at from there (Mitsuba's envmap)."""
+    photo = 0.0
+    for off in [((i + 0.5) / 4, (j + 0.5) / 4) for i in range(4) for j in range(4)]:
+        d = cam.pixel_rays(np.array(off))[mask]
+        q = cam.center + (-cam.center[1] / d[:, 1])[:, None] * d - point
+        photo = photo + _mitsuba_radiance(lighting.emitter(), q / np.linalg.norm(q, axis=1, keepdims=True)) / 16
+    return photo
+
+
+def test_backdrop_projected_from_the_camera_shows_the_photo_as_shot():
+    """Moved above a camera off its first centre, the projection shows each ground pixel as the
+    photo does along that pixel's own ray (no smear), and the dome moves with it; from the old
+    centre the same pixels showed something else."""
+    scene, lighting, _ = _backdrop_scene()
+    cam = sm.Camera.look_at((7.0, H_M, 5.0), (2.0, 0.0, -3.0), fov_y_deg=60, width=64, height=48)
+    before = sm.render(scene, cam, spp=64, seed=1)
+    assert backdrop.centre_backdrop(scene, cam.center)
+    assert not backdrop.centre_backdrop(scene, cam.center)                  # already there
+    assert np.allclose(scene.environment.dome.centre, [7.0, H_M, 5.0])
+    after = sm.render(scene, cam, spp=64, seed=1)
+    ground = (after.passes["layer"] == int(sm.Layer.GROUND)) & (before.passes["layer"] == int(sm.Layer.GROUND))
+    assert ground.sum() > 1000
+    seen = _photo_over(cam, lighting, ground, cam.center)   # = the panorama along the pixel's ray
+    ratio = after.passes["rgb"][ground].sum(1) / seen.sum(1)
+    assert abs(np.median(ratio) - 1) < 0.05 and np.percentile(np.abs(ratio - 1), 90) < 0.1, np.median(ratio)
+    old = before.passes["rgb"][ground].sum(1) / seen.sum(1)
+    assert np.percentile(np.abs(old - 1), 90) > 0.3, np.percentile(np.abs(old - 1), 90)
+    # the same views in any order give the same bits: the disc is built from the point
+    backdrop.centre_backdrop(scene, (0.0, 0.0, 0.0))
+    backdrop.centre_backdrop(scene, cam.center)
+    assert np.array_equal(sm.render(scene, cam, spp=4, seed=2).rgb, sm.render(scene, cam, spp=4, seed=2).rgb)
+    fresh, _, _ = _backdrop_scene()
+    backdrop.centre_backdrop(fresh, cam.center)
+    assert np.array_equal(fresh.meshes["ground"].vertices, scene.meshes["ground"].vertices)
+
+
 def test_dome_background_is_the_photo_seen_from_its_centre():
     """Above the horizon a pixel shows the panorama where its ray meets the dome (a sphere of
     R_M about the ground point below the projection point), seen from the projection point."""
@@ -158,12 +196,39 @@ def test_every_blender_hdri_has_a_backdrop_and_cameras_stay_on_its_ground():
     hdris = {os.path.basename(p) for p in glob.glob(os.path.join(SCENES_DIR, "hdri", "*.exr"))}
     backdrops = [environments.load_environment(n) for n in environments.environment_names() if n.startswith("hdri_")]
     assert {os.path.basename(e.lighting.file) for e in backdrops} == hdris and len(hdris) == 8
-    env = environments.load_environment("hdri_studio")
-    cfg = {"environments": ["hdri_studio"], "subjects": {"count": 2, "seconds": 0.5},
+    env = environments.load_environment("hdri_forest")
+    cfg = {"environments": ["hdri_forest"], "subjects": {"count": 2, "seconds": 0.5},
            "cameras": {"count": 3, "width": 64, "height": 48}}
     spec = sm.compose_scene(cfg, np.random.default_rng(4), seed=4)
     eyes = np.array([c.center for v in spec.views for c in v.cameras])
+    assert len(spec.views) == 3
     assert np.abs(eyes[:, [0, 2]]).max() <= environments.DOME_KEEP * env.backdrop.radius_m + 1e-9
+    # every subject stands on the photo's open floor as seen from each view's projection point:
+    # the forest's path (panorama azimuths 45-190 degrees, 12 m), elsewhere fences 2 m away
+    rot = spec.lighting.rotation_deg
+    for v in spec.views:
+        p = backdrop.view_projection_point(v.cameras)
+        for s in spec.subjects:
+            x0, z0, x1, z1 = s.footprint
+            for x in (x0, x1):
+                for z in (z0, z1):
+                    # the corner's azimuth across the panorama, worked out here from its convention
+                    d = np.array([x - p[0], 0.0, z - p[2]])
+                    c, sn = np.cos(np.radians(rot)), np.sin(np.radians(rot))
+                    local = np.array([c * d[0] - sn * d[2], 0.0, sn * d[0] + c * d[2]])   # turned back by rot
+                    az = np.degrees(np.arctan2(local[0], -local[2])) % 360
+                    dist = np.hypot(d[0], d[2])
+                    assert dist <= 2.0 or (45 <= az <= 190 and dist <= 12.0), (v.name, az, dist)
+
+
+def test_floor_reach_and_panorama_azimuths():
+    b = environments.Backdrop.from_dict({"radius_m": 20, "floor_m": 2.0, "floor_sectors": [[300, 40, 9], [90, 120, 5]]},
+                                        "backdrop")
+    assert np.allclose(b.floor_reach([0, 20, 41, 100, 299, 330, 200]), [9, 9, 2, 5, 2, 9, 2])
+    assert environments.Backdrop.from_dict({"radius_m": 20}, "backdrop").open_floor_m == 18.0
+    # a pixel's own direction falls at its column's angle
+    dirs = panorama.pixel_directions(8, 16, 37.0)
+    assert np.allclose(panorama.azimuth_deg(dirs[2:6], 37.0), np.tile(360 * (np.arange(16) + 0.5) / 16, (4, 1)))
 
 
 def test_backdrop_needs_an_hdri():

@@ -9,6 +9,12 @@ the light, it darkens as a shadow in the photo would. The ground is a polar mesh
 projection centre whose rows are the panorama's own elevations, out to 0.05 degrees below the
 horizon; beyond it rays meet the panorama itself.
 
+A projection is exact only from its own point: seen from elsewhere, the photo's ground smears
+into streaks (near the horizon one panorama row spans a metre of ground) and whatever stood on
+it (furniture, walls) lies flat. So each view is rendered with the projection moved above its
+camera (``centre_backdrop``; ``view_projection_point``), as BEDLAM shoots from the HDRI's own
+point; the ground does not move over a view's clip, so it stays still as the camera moves.
+
 Directions follow Mitsuba's ``envmap`` (checked against its ``eval`` in tests/test_backdrop.py):
 pixel (row, col) of an H x W panorama looks along theta = pi (row + 0.5) / H from +y and
 phi = 2 pi (col + 0.5) / W, local d = (sin theta sin phi, cos theta, -sin theta cos phi), then
@@ -136,3 +142,30 @@ def add_backdrop(scene, lighting, height_m: float, radius_m: float, centre=(0.0,
                    material=Material(texture=albedo, kind="diffuse", name="ground"),
                    instance=GROUND_INSTANCE, layer=int(Layer.GROUND))
     return sun
+
+
+def view_projection_point(cameras: list) -> np.ndarray:
+    """Where a view's backdrop is projected from: its camera at the clip's middle frame (fixed
+    over the clip, so the photo's ground moves with the world, not with the camera)."""
+    return np.asarray(cameras[len(cameras) // 2].center, np.float64)
+
+
+def centre_backdrop(scene, point) -> bool:
+    """Project the scene's backdrop from above ``point`` (x, _, z): the ground disc, whose
+    texture is polar about its own centre, and the dome move there (the height stays the
+    photo's). Built afresh from the point, so a view renders the same bits whichever views came
+    before it. False (nothing done) without a backdrop or when it is there already."""
+    env = scene.environment
+    dome = getattr(env, "dome", None)
+    if dome is None or "ground" not in scene.meshes:
+        return False
+    x, z = float(point[0]), float(point[2])
+    if (x, z) == (dome.centre[0], dome.centre[2]):
+        return False
+    height = dome.centre[1]
+    v, _, _ = projected_ground_mesh(height, dome.radius_m, MESH_ROWS, MESH_COLS, TEX_ROWS, (x, z))
+    ground = scene.meshes["ground"]
+    scene.update_mesh("ground", v, normals=ground.normals)
+    ground.previous_vertices = ground.vertices    # the ground stands still in time (flow)
+    env.dome = Dome((x, height, z), dome.radius_m)
+    return True

@@ -145,7 +145,8 @@ def compose_scene(config, rng: np.random.Generator, seed: int | None = None) -> 
         spec_ = SceneSpec(resolve_environment(name), lighting, ground_seed, _subject_specs(placed, placements, env), [],
                           len(placements[0].frames), sc.fps, [], seed, cfg.to_dict())
         spec_.build([d.human for d in placed])
-        spec_.views, spec_.scored_frames = _views(spec_, camera_boxes, cfg.cameras, rng, cfg.occlusion, least)
+        spec_.views, spec_.scored_frames = _views(spec_, camera_boxes, cfg.cameras, rng, cfg.occlusion, least,
+                                                  env.backdrop)
         _direct(spec_, rng)
         return spec_
     for redraw in range(MOTION_REDRAWS + 1):
@@ -243,16 +244,36 @@ def _drafted(recipe: SubjectRecipe, motion: MotionSpec, human: LayeredHuman, i: 
     return _Draft(recipe, motion, human, hands, face, *clip_bounds(human, clip))
 
 
+def _on_floor(trajs: list, group: cams.Group, backdrop, rotation_deg: float) -> list:
+    """The trajectories whose backdrop projection point (the camera at the middle frame,
+    ``backdrop.view_projection_point``) sees every subject's clip box on the photo's open floor
+    (``Backdrop.floor_reach`` along each corner's panorama azimuth): a ground-projected photo
+    shows floor only so far from where it was shot, and what stands beyond lies flat on it."""
+    if backdrop is None:
+        return trajs
+    from synmitsuba.scene.panorama import azimuth_deg
+    corners = group.boxes[:, [[0, 2], [0, 5], [3, 2], [3, 5]]].reshape(-1, 2)
+    kept = []
+    for t in trajs:
+        d = corners - t.eye[len(t.eye) // 2][[0, 2]]
+        dirs = np.stack([d[:, 0], np.zeros(len(d)), d[:, 1]], -1)
+        if (np.hypot(d[:, 0], d[:, 1]) <= backdrop.floor_reach(azimuth_deg(dirs, rotation_deg))).all():
+            kept.append(t)
+    return kept
+
+
 def _views(spec_: SceneSpec, boxes: np.ndarray, cfg: cams.CameraConfig, rng,
-           target: VisibilityTarget | None = None, least: int = 1) -> tuple[list, list]:
+           target: VisibilityTarget | None = None, least: int = 1, backdrop=None) -> tuple[list, list]:
     """The scene's views and the frames they were scored at; NoViewFits when fewer than
-    ``least`` candidates pass the bounds, a warning when fewer than ``cfg.count`` do."""
+    ``least`` candidates pass the bounds (and, under a ``backdrop``, keep the subjects on the
+    photo's open floor), a warning when fewer than ``cfg.count`` do."""
     group = _group(spec_.subjects, cfg.target_height)
     sizes = cams.view_sizes(cfg, cfg.count, rng)
     scene, placed = spec_.build()
     trajs = _trajectories(group, placed, boxes, cfg, rng, sizes)
     if target is not None and target.on and cfg.mode == "shell":
         trajs += lines_of_sight(group, boxes, cfg, rng, sizes)
+    trajs = _on_floor(trajs, group, backdrop, getattr(spec_.lighting, "rotation_deg", 0.0))
     cams.check_count(len(trajs), cfg, group, least)
     if len(trajs) < cfg.count:
         warnings.warn(f"only {len(trajs)} of cameras.count = {cfg.count} views frame the group within the bounds; "

@@ -145,6 +145,26 @@ class Backdrop(Params):
     height_m: float = spec(1.7, Number(0.2, 20), doc="how high above its ground the panorama was shot")
     radius_m: float = spec(30.0, Number(2, 1000), doc="the projected ground's radius; beyond it, the photo on a dome")
     key_light: bool = spec(True, Flag(), doc="the panorama's sun (if it has one) as a directional light")
+    floor_m: float | None = spec(None, optional(Number(0.5, 1000)),
+                                 doc="how far from where the photo was shot its floor is open in every direction "
+                                 "(walls, fences and furniture stand beyond, and would lie flat under people): "
+                                 "every view keeps all subjects within it of its camera; default 0.9 radius_m")
+    floor_sectors: list = spec(factory=list, check=ListOf(Vector(3, what="from_deg, to_deg, metres")),
+                               doc="where the floor reaches further: panorama azimuths from_deg to to_deg (a column "
+                               "over the width times 360, from the left edge) open for metres")
+
+    @property
+    def open_floor_m(self) -> float:
+        return 0.9 * self.radius_m if self.floor_m is None else float(self.floor_m)
+
+    def floor_reach(self, azimuth_deg) -> np.ndarray:
+        """Metres the photo's floor is open along panorama azimuths (degrees, as ``floor_sectors``)."""
+        az = np.asarray(azimuth_deg, np.float64) % 360.0
+        reach = np.full(az.shape, self.open_floor_m)
+        for a, b, metres in self.floor_sectors:
+            inside = ((az >= a) & (az <= b)) if a <= b else ((az >= a) | (az <= b))
+            reach = np.where(inside, np.maximum(reach, metres), reach)
+        return reach
 
 
 @dataclass

@@ -36,6 +36,13 @@ def pixel_directions(h: int, w: int, rotation_deg: float = 0.0) -> np.ndarray:
     return d @ rot_y(rotation_deg).T
 
 
+def azimuth_deg(directions: np.ndarray, rotation_deg: float = 0.0) -> np.ndarray:
+    """Where world ``directions`` (..., 3) fall across the panorama: its column over the width
+    times 360 (0 at the left edge), for a panorama turned ``rotation_deg``."""
+    d = directions @ rot_y(rotation_deg)
+    return (np.degrees(np.arctan2(d[..., 0], -d[..., 2])) % 360.0)
+
+
 def lookup(pixels: np.ndarray, directions: np.ndarray, rotation_deg: float = 0.0) -> np.ndarray:
     """Bilinear radiance of the panorama along world ``directions`` (..., 3), u wrapping."""
     h, w = pixels.shape[:2]
