@@ -68,3 +68,28 @@ def test_people_are_placed_on_a_street_clear_of_its_objects():
         x, z = s.position[0], s.position[-1]
         assert not ((boxes[:, 0] < x) & (x < boxes[:, 3]) & (boxes[:, 2] < z) & (z < boxes[:, 5])).any()
     assert len(spec.views) == 2
+
+
+def test_the_six_built_places_have_branched_trees_bushes_and_slatted_benches():
+    """No sphere-on-a-stick trees or bare blocks left: every tree forks into branches with
+    leaves, every planter grows a bush, every bench has three slats."""
+    for name in ("plaza", "park", "street", "courtyard", "beach", "gallery"):
+        env = environments.load_environment(name)
+        for obj in env.objects:
+            roles = [r for _, r in environments.object_parts(obj)]
+            if obj.kind in ("tree", "tree2"):
+                assert roles.count("trunk") >= 1 + 5 * 4 and {"leaf", "leaf2"} <= set(roles), (name, obj.kind)
+            if obj.kind == "planter":
+                assert {"leaf", "leaf2", "trunk"} <= set(roles), name
+            if obj.kind == "bench":
+                assert roles.count("main") == 3 and roles.count("metal") == 2, name
+
+
+def test_cameras_stay_on_the_people_side_of_the_courtyard_walls():
+    """camera_keep_out: no view stands behind the courtyard's two walls looking over them."""
+    cfg = {"environments": ["courtyard"], "subjects": {"count": 2, "seconds": 0.5},
+           "cameras": {"count": 4, "width": 64, "height": 48, "pitch_deg": [-5, 60]}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(3), seed=3)
+    centres = np.array([c.center for v in spec.views for c in v.cameras])
+    assert len(spec.views) == 4
+    assert (centres[:, 0] > -5.05).all() and (centres[:, 2] > -5.05).all(), centres.min(0)

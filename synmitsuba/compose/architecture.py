@@ -98,6 +98,25 @@ def kerb(w, h, d, rng):
     return [(chamfer_box(w, h, d, 0.03), "main")]
 
 
+def bench(w, h, d, rng):
+    """A bench: three slats with chamfered edges on two metal frames."""
+    t, gap = 0.035, 0.01
+    slats = [(chamfer_box(w, t, d / 3 - gap, 0.006, y0=h - t, z=(k - 1) * d / 3), "main") for k in range(3)]
+    return slats + [(chamfer_box(0.05, h - t, d * 0.9, 0.008, x=s * (w / 2 - 0.12)), "metal") for s in (-1, 1)]
+
+
+def steps(w, h, d, rng, n=3):
+    """A flight of ``n`` steps rising towards -z."""
+    return [(chamfer_box(w, h * (k + 1) / n, d * (n - k) / n, 0.01, z=-d / 2 + d * (n - k) / (2 * n)), "main")
+            for k in range(n)]
+
+
+def pillar(w, h, d, rng):
+    """A round column on a square plinth under a square capital."""
+    return [(_cyl(w / 2, h, sections=32), "main"), (chamfer_box(1.3 * w, 0.12, 1.3 * d, 0.015), "stone"),
+            (chamfer_box(1.3 * w, 0.1, 1.3 * d, 0.015, y0=h - 0.1), "stone")]
+
+
 # -- furniture --------------------------------------------------------------------------------
 def table(w, h, d, rng):
     t = 0.04
@@ -188,7 +207,18 @@ def bush(w, h, d, rng):
     return [*stems, (_leaves(c[:1200], 0.08, rng), "leaf"), (_leaves(c[1200:], 0.08, rng), "leaf2")]
 
 
+def planter(w, h, d, rng):
+    """A planter box with a bush growing out of it."""
+    box_h = 0.45 * h
+    plants = [(m.apply_translation((0.0, box_h - 0.05, 0.0)), r) for m, r in bush(0.9 * w, h - box_h + 0.05, 0.9 * d, rng)]
+    return [(chamfer_box(w, box_h, d, 0.02), "main"), *plants]
+
+
 BUILDERS: dict[str, tuple[Callable, tuple]] = {   # kind -> (builder, default w, h, d)
+    "box": (lambda w, h, d, rng: [(chamfer_box(w, h, d, 0.01), "main")], (0.6, 0.6, 0.6)),
+    "wall": (lambda w, h, d, rng: [(chamfer_box(w, h, d, 0.01), "main")], (4.0, 2.5, 0.2)),
+    "pillar": (pillar, (0.5, 3.0, 0.5)), "bench": (bench, (1.6, 0.45, 0.45)), "planter": (planter, (0.8, 0.9, 0.8)),
+    "tree": (tree, (1.6, 3.5, 1.6)), "steps": (steps, (2.0, 0.45, 1.2)),
     "building": (building, (12.0, 9.0, 8.0)), "lamp": (lamp, (0.3, 4.5, 0.3)), "bollard": (bollard, (0.16, 0.9, 0.16)),
     "kerb": (kerb, (10.0, 0.15, 2.5)), "table": (table, (1.4, 0.75, 0.8)), "chair": (chair, (0.45, 0.9, 0.48)),
     "sofa": (sofa, (2.0, 0.85, 0.9)), "shelf": (shelf, (1.0, 1.9, 0.32)), "tree2": (tree, (3.0, 6.0, 3.0)),

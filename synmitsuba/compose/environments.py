@@ -17,7 +17,7 @@ import numpy as np
 
 from synmitsuba.compose.instances import GROUND_INSTANCE, OBJECT_INSTANCE
 from synmitsuba.errors import ConfigError
-from synmitsuba.compose.architecture import BUILDERS, LAYOUTS, ROLES, chamfer_box
+from synmitsuba.compose.architecture import BUILDERS, LAYOUTS, ROLES
 from synmitsuba.compose.backdrop import add_backdrop
 from synmitsuba.compose.grounds import GROUND_MATERIALS, ground_material
 from synmitsuba.geometry import ground_grid
@@ -32,51 +32,7 @@ GROUND_HALF_SIZE = 20000.0  # metres: the ground's edge lies < 0.01 degrees belo
 
 
 # -- objects ------------------------------------------------------------------------------
-def _box(w, h, d, y0=0.0, x=0.0, z=0.0):
-    import trimesh
-    return trimesh.creation.box(extents=(w, h, d)).apply_translation((x, y0 + h / 2, z))
-
-
-def _cylinder(r, h, y0=0.0, x=0.0, z=0.0, sections=24):
-    import trimesh
-    m = trimesh.creation.cylinder(radius=r, height=h, sections=sections)
-    return m.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))).apply_translation((x, y0 + h / 2, z))
-
-
-def _sphere(r, y, x=0.0, z=0.0):
-    import trimesh
-    return trimesh.creation.icosphere(subdivisions=2, radius=r).apply_translation((x, y, z))
-
-
-def _bench(w, h, d):
-    legs = [_box(0.06, h - 0.05, d * 0.9, x=s * (w / 2 - 0.08)) for s in (-1, 1)]
-    return [(_box(w, 0.05, d, y0=h - 0.05), "main"), *((leg, "dark") for leg in legs)]
-
-
-def _tree(w, h, d):
-    trunk_h = 0.45 * h
-    return [(_cylinder(0.06 * w, trunk_h + 0.1 * h), "trunk"),
-            (_sphere(w / 2, trunk_h + w / 2 * 0.9), "main")]
-
-
-def _planter(w, h, d):
-    return [(_box(w, 0.45 * h, d), "main"), (_sphere(0.45 * min(w, d), 0.45 * h + 0.2 * min(w, d)), "leaf")]
-
-
-def _steps(w, h, d, n=3):
-    return [(_box(w, h * (k + 1) / n, d * (n - k) / n, z=-d / 2 + d * (n - k) / (2 * n)), "main") for k in range(n)]
-
-
-OBJECT_KINDS: dict = {  # kind -> (builder(w, h, d, rng) -> [(trimesh, role)], default size w, h, d)
-    "box": (lambda w, h, d, rng: [(chamfer_box(w, h, d, 0.01), "main")], (0.6, 0.6, 0.6)),
-    "wall": (lambda w, h, d, rng: [(_box(w, h, d), "main")], (4.0, 2.5, 0.2)),
-    "pillar": (lambda w, h, d, rng: [(_cylinder(w / 2, h), "main")], (0.5, 3.0, 0.5)),
-    "bench": (lambda w, h, d, rng: _bench(w, h, d), (1.6, 0.45, 0.45)),
-    "planter": (lambda w, h, d, rng: _planter(w, h, d), (0.8, 0.9, 0.8)),
-    "tree": (lambda w, h, d, rng: _tree(w, h, d), (1.6, 3.5, 1.6)),
-    "steps": (lambda w, h, d, rng: _steps(w, h, d), (2.0, 0.45, 1.2)),
-    **BUILDERS,
-}
+OBJECT_KINDS: dict = BUILDERS  # kind -> (builder(w, h, d, rng) -> [(trimesh, role)], default size w, h, d)
 
 
 @dataclass
