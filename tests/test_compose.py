@@ -587,3 +587,12 @@ def test_head_cameras_ride_on_a_wearers_head(sm):
         wearer_id = spec.subjects[int(np.argmin([np.linalg.norm(e[spec.n_frames // 2] - sample.camera.center)
                                                  for e, _ in heads]))].instance
         assert (sample.instance == wearer_id).mean() < 0.05
+
+
+def test_a_lone_subject_whose_clip_fits_nowhere_gets_a_new_motion(sm):
+    """nerf.yaml's first gallery composition drew a 10 s walk that fits nowhere in the room:
+    with one subject placement raised instead of drawing another motion."""
+    cfg = {"environments": ["gallery"], "subjects": {"count": 1, "seconds": 10.0, "motions": ["walk", "wave", "gesture", "turn"]},
+           "cameras": {"mode": "ring", "count": 2, "ring_distance": 3.2, "width": 32, "height": 32, "hfov_deg": [40, 40]}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(0), seed=0)
+    assert len(spec.subjects) == 1 and len(spec.views) == 2

@@ -197,7 +197,11 @@ def _place(drafts: list, env, boxes: np.ndarray, cfg: ComposeConfig, sources: li
     for _ in range(MOTION_REDRAWS):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SynMitsubaWarning)
-            placements = place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng, cluster=cluster)
+            try:
+                placements = place_subjects([d.hulls for d in drafts], env.area, boxes, cfg.placement, rng,
+                                            cluster=cluster)
+            except ConfigError:   # not one fits (a lone subject's 10 s walk in a gallery): all drawn anew
+                placements = []
         placed = {p.index for p in placements}
         if len(placed) == len(drafts):
             return placements
