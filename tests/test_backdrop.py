@@ -208,6 +208,7 @@ def test_every_blender_hdri_has_a_backdrop_and_cameras_stay_on_its_ground():
     rot = spec.lighting.rotation_deg
     for v in spec.views:
         p = backdrop.view_projection_point(v.cameras)
+        assert abs(p[1] - 1.7) <= env.backdrop.camera_rise_m == 1.2      # near the shooting height
         for s in spec.subjects:
             x0, z0, x1, z1 = s.footprint
             for x in (x0, x1):

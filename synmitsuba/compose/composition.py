@@ -251,15 +251,19 @@ def _drafted(recipe: SubjectRecipe, motion: MotionSpec, human: LayeredHuman, i: 
 def _on_floor(trajs: list, group: cams.Group, backdrop, rotation_deg: float) -> list:
     """The trajectories whose backdrop projection point (the camera at the middle frame,
     ``backdrop.view_projection_point``) sees every subject's clip box on the photo's open floor
-    (``Backdrop.floor_reach`` along each corner's panorama azimuth): a ground-projected photo
-    shows floor only so far from where it was shot, and what stands beyond lies flat on it."""
+    (``Backdrop.floor_reach`` along each corner's panorama azimuth) and stands within
+    ``camera_rise_m`` of the shooting height: a ground-projected photo shows floor only so far
+    from where it was shot, and what stands beyond, or on it, lies flat there."""
     if backdrop is None:
         return trajs
     from synmitsuba.scene.panorama import azimuth_deg
     corners = group.boxes[:, [[0, 2], [0, 5], [3, 2], [3, 5]]].reshape(-1, 2)
     kept = []
     for t in trajs:
-        d = corners - t.eye[len(t.eye) // 2][[0, 2]]
+        eye = t.eye[len(t.eye) // 2]
+        if abs(eye[1] - backdrop.height_m) > backdrop.camera_rise_m:
+            continue
+        d = corners - eye[[0, 2]]
         dirs = np.stack([d[:, 0], np.zeros(len(d)), d[:, 1]], -1)
         if (np.hypot(d[:, 0], d[:, 1]) <= backdrop.floor_reach(azimuth_deg(dirs, rotation_deg))).all():
             kept.append(t)

@@ -105,6 +105,10 @@ class Backdrop(Params):
                                  doc="how far from where the photo was shot its floor is open in every direction "
                                  "(walls, fences and furniture stand beyond, and would lie flat under people): "
                                  "every view keeps all subjects within it of its camera; default 0.9 radius_m")
+    camera_rise_m: float = spec(1.2, Number(0, 1000),
+                                doc="how far above or below the shooting height a view's camera may stand: what "
+                                "stood on the photo's floor lies flat on the projected ground and looks upright "
+                                "only from near that height")
     floor_sectors: list = spec(factory=list, check=ListOf(Vector(3, what="from_deg, to_deg, metres")),
                                doc="where the floor reaches further: panorama azimuths from_deg to to_deg (a column "
                                "over the width times 360, from the left edge) open for metres")
