@@ -85,11 +85,14 @@ def test_the_six_built_places_have_branched_trees_bushes_and_slatted_benches():
                 assert roles.count("main") == 3 and roles.count("metal") == 2, name
 
 
-def test_cameras_stay_on_the_people_side_of_the_courtyard_walls():
-    """camera_keep_out: no view stands behind the courtyard's two walls looking over them."""
-    cfg = {"environments": ["courtyard"], "subjects": {"count": 2, "seconds": 0.5},
+@pytest.mark.parametrize("name, lo, hi", [
+    ("courtyard", (-5.05, -np.inf, -5.05), (np.inf, np.inf, np.inf)),
+    ("gallery", (-5.35, -np.inf, -4.85), (5.35, 3.8, 4.85))])   # a closed hall under its ceiling
+def test_cameras_stay_on_the_people_side_of_walls(name, lo, hi):
+    """camera_keep_out: no view stands behind a wall looking over it, or over a ceiling."""
+    cfg = {"environments": [name], "subjects": {"count": 2, "seconds": 0.5},
            "cameras": {"count": 4, "width": 64, "height": 48, "pitch_deg": [-5, 60]}}
     spec = sm.compose_scene(cfg, np.random.default_rng(3), seed=3)
     centres = np.array([c.center for v in spec.views for c in v.cameras])
     assert len(spec.views) == 4
-    assert (centres[:, 0] > -5.05).all() and (centres[:, 2] > -5.05).all(), centres.min(0)
+    assert (centres > lo).all() and (centres < hi).all(), (centres.min(0), centres.max(0))
