@@ -81,6 +81,7 @@ bench: setup
 	$(PY) bench/crowds.py --compositions 100   # hps.yaml: every subject and view, no failure (~30 min)
 	$(PY) bench/crowds.py --sequences 10 --small "render.spp=16,frames=2,stride=30" --out out/bench_crowds   # ~50 min
 	$(PY) bench/places.py   # environment build and render cost, ground repeat, backdrop resolution
+	$(PY) bench/places_sheet.py --out out/places_sheet   # one hps frame per environment, 1280x720 (~35 min)
 	$(PY) bench/motion_blur.py                                    # blur at 8 sub-frames / sharp, equal spp
 	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
 

@@ -9,7 +9,9 @@ the 6 original environments (with their new grounds) are the reference the new k
 compared to as a ratio. ``ground``: plaza's blended ground against its first tile alone (what
 one repeating texture costs). ``repeat``: per ground material, how much more alike 20 cm blocks
 of a rendered top view are one tile period apart than at other lags (0: nothing repeats; the
-single tile for reference). ``backdrop``: HDRI texels per image pixel.
+single tile for reference). ``backdrop``: HDRI texels per image pixel. ``projection``: one
+frame of a composed ``hdri_city`` scene (2 people, 4 views, motion blur) with each view's own
+projection (the ground rebuilt per view and sub-frame) against one projection for all views.
 
     python bench/places.py
 """
@@ -96,6 +98,30 @@ def repeat(material, period: float, span=30.0, px=300) -> float:
     return round(_corr(b, lag) - float(np.median(others)), 3)
 
 
+def projection_cost(spp: int = 16, shutter: float = 0.5) -> dict:
+    """Seconds for one frame of 4 views, each projected from its camera, against all views
+    seen with the first projection (``centre_backdrop`` a no-op), same scene and seed."""
+    import synmitsuba as sm
+    from synmitsuba import pipeline
+    cfg = {"environments": ["hdri_city"], "subjects": {"count": 2, "seconds": 1.0},
+           "cameras": {"count": 4, "width": 320, "height": 180, "hfov_deg": [40, 70]}}
+    spec = sm.compose_scene(cfg, np.random.default_rng(2), seed=2)
+    frame = spec.n_frames // 2
+    out = {}
+    own = pipeline.centre_backdrop
+    for label, fn in (("per_view", own), ("one_projection", lambda scene, point: False)):
+        pipeline.centre_backdrop = fn
+        try:
+            list(pipeline.render_sequence(spec, frames=[frame], spp=spp, seed=1, shutter=shutter, annotate=False))
+            t = time.perf_counter()
+            list(pipeline.render_sequence(spec, frames=[frame], spp=spp, seed=1, shutter=shutter, annotate=False))
+            out[label] = round(time.perf_counter() - t, 2)
+        finally:
+            pipeline.centre_backdrop = own
+    out["ratio"] = round(out["per_view"] / out["one_projection"], 2)
+    return out
+
+
 def main():
     import synmitsuba as sm
     from synmitsuba.compose import grounds
@@ -113,7 +139,8 @@ def main():
     texel_deg = 360.0 / 1024
     backdrop = {f"hfov_{h}": round(texel_deg * 1280 / h, 1) for h in (30, 60, 90)}
     print(json.dumps({"environments": envs, "median_ratio_to_original": ratios, "ground": ground_against_single_tile(),
-                      "repeat": reps, "backdrop_pixels_per_hdri_texel": backdrop}, indent=1))
+                      "repeat": reps, "backdrop_pixels_per_hdri_texel": backdrop, "projection": projection_cost()},
+                     indent=1))
 
 
 if __name__ == "__main__":
