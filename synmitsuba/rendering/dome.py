@@ -27,7 +27,7 @@ def _dome_radiance(environment, cameras: list, whole: np.ndarray, edge: np.ndarr
     """Averaged over ``cameras``: the panorama where the pixel-centre rays of the ``whole``
     pixels meet the dome, and for the ``edge`` pixels that minus the panorama along the ray."""
     pixels, rot, dome = environment.pixels(), environment.rotation_deg, environment.dome
-    seen, swap = 0.0, 0.0
+    seen, swap = np.zeros((int(whole.sum()), 3)), np.zeros((int(edge.sum()), 3))
     for cam in cameras:
         rays = cam.pixel_rays()
         w, e = rays[whole], rays[edge]
