@@ -9,7 +9,9 @@ tuning, no plotting backend, no environment variables. An application that owns 
   few frames later);
 - ``freeze_after_model_load``: ``gc.freeze()`` once the body model is loaded (about 400,000
   long-lived objects that every collection would otherwise scan: 0.4 s a scene load);
-- ``torch_threads``: torch's intra-op threads for the body model (anny), applied when it loads.
+- ``torch_threads``: torch's intra-op threads for the body model (anny), set exactly (not
+  capped at the environment's default) when it loads, so subjects are built bit for bit alike
+  in every worker.
 
 (Figures are drawn on bare matplotlib ``Figure`` objects, so no plotting backend is ever set.)
 
@@ -54,7 +56,7 @@ def _cgroup_cpus() -> int | None:
 
 def configure_process(torch_threads: int | None = 2) -> ProcessSettings:
     """Opt this process into the settings above (the CLI and generation workers call it);
-    returns them. ``torch_threads``: cap for the body model's torch threads (None: torch's own)."""
+    returns them. ``torch_threads``: the body model's torch threads (None: torch's own)."""
     SETTINGS.collect_before_load = True
     SETTINGS.freeze_after_model_load = True
     SETTINGS.torch_threads = torch_threads

@@ -83,7 +83,10 @@ def load_anny():
         import anny
         _quiet_warp()
         if SETTINGS.torch_threads:
-            torch.set_num_threads(max(1, min(SETTINGS.torch_threads, torch.get_num_threads())))
+            # exactly this many, whatever the environment's default: torch's reductions split by
+            # thread count, so a Ray worker (OMP_NUM_THREADS=1) built subjects 1e-8 apart from a
+            # local worker's, and every file of the sequence differed
+            torch.set_num_threads(SETTINGS.torch_threads)
         model = anny.Anny().to(dtype=torch.float32)
     if SETTINGS.freeze_after_model_load:
         _freeze_long_lived()
