@@ -366,7 +366,7 @@ def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLi
             if role == "main" and obj.texture is not None:
                 look = (obj.texture, tuple(obj.color))
                 if look not in textured:
-                    textured[look] = ground_material(obj.texture, obj.color, np.random.default_rng(obj.seed), n=512)
+                    textured[look] = ground_material(obj.texture, obj.color, np.random.default_rng(obj.seed), n=256)
                 mat, period = textured[look]
                 uv = _box_uv(mesh) / period
             elif role == "main":
