@@ -96,3 +96,28 @@ def test_cameras_stay_on_the_people_side_of_walls(name, lo, hi):
     centres = np.array([c.center for v in spec.views for c in v.cameras])
     assert len(spec.views) == 4
     assert (centres > lo).all() and (centres < hi).all(), (centres.min(0), centres.max(0))
+
+
+def test_a_built_place_loads_one_bsdf_per_look_and_keeps_every_triangle():
+    """Parts of one object with one look are one mesh, and every look is one Mitsuba BSDF:
+    drjit traces a call over every live BSDF, and a BSDF per part (1,094 on city_street) made
+    a 160x120 frame cost 3.6 s instead of 0.7 s."""
+    import drjit as dr
+    import mitsuba as mi
+    from synmitsuba.engine.build import load
+    from synmitsuba.engine.variant import require_variant
+    require_variant()
+    env = environments.load_environment("city_street")
+    scene = sm.Scene()
+    environments.add_environment(scene, env, environments.sample_lighting(env, np.random.default_rng(0)),
+                                 np.random.default_rng(0))
+    parts = [p for o in env.objects for p in environments.object_parts(o)]
+    objects = {n: m for n, m in scene.meshes.items() if n.startswith("object")}
+    assert sum(len(m.faces) for m in objects.values()) == sum(len(p.faces) for p, _ in parts)
+    assert len(objects) < len(parts) / 4
+    # roles and textured looks across all objects, counted from the parts themselves
+    looks = {r if r != "main" else (o.texture, tuple(o.color), None if o.texture else o.roughness)
+             for o in env.objects for _, r in environments.object_parts(o)}
+    mi_scene = load(scene).mi_scene
+    bsdf_ids = dr.reinterpret_array(mi.UInt32, mi_scene.shapes_dr().bsdf()).numpy()
+    assert len(set(bsdf_ids.tolist())) == len(looks) + 1          # and the ground's

@@ -61,7 +61,8 @@ class DiffScene:
             scene = copy.copy(scene)
             scene.set_environment(EnvMap(self.sun.image()))
         self.scene = scene
-        self.built = load(scene)  # its own build: apply() never changes what sm.render(scene) sees
+        # its own build, a BSDF per mesh (a key per mesh): apply() never changes what sm.render(scene) sees
+        self.built = load(scene, share_bsdfs=False)
         self.params = self.built.params
         self.integrator = mi.load_dict({"type": integrator, "max_depth": max_depth})
         self.variables: dict = {}    # name -> drjit value

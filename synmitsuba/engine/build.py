@@ -76,7 +76,9 @@ def bsdf_dict(mat: Material | Blend) -> dict:
     return bsdf
 
 
-def _mesh(shape: MeshShape):
+def _mesh(shape: MeshShape, bsdfs: dict | None = None):
+    """A Mitsuba mesh of ``shape``; with ``bsdfs`` (Material id -> BSDF), meshes that hold the
+    same Material object share one BSDF."""
     import mitsuba as mi
     m = mi.Mesh(shape.name, len(shape.vertices), len(shape.faces),
                 has_vertex_normals=shape.normals is not None, has_vertex_texcoords=shape.uv is not None)
@@ -89,7 +91,13 @@ def _mesh(shape: MeshShape):
         uv = np.stack([shape.uv[:, 0], 1.0 - shape.uv[:, 1]], 1)
         p["vertex_texcoords"] = mi.Float(uv.astype(np.float32).ravel())
     p.update()
-    m.set_bsdf(mi.load_dict(bsdf_dict(shape.material)))
+    if bsdfs is None:
+        m.set_bsdf(mi.load_dict(bsdf_dict(shape.material)))
+        return m
+    key = id(shape.material)
+    if key not in bsdfs:
+        bsdfs[key] = mi.load_dict(bsdf_dict(shape.material))
+    m.set_bsdf(bsdfs[key])
     return m
 
 
@@ -417,13 +425,16 @@ def build(scene: Scene) -> BuiltScene:
     return built
 
 
-def load(scene: Scene) -> BuiltScene:
+def load(scene: Scene, share_bsdfs: bool = True) -> BuiltScene:
     """A fresh Mitsuba build of ``scene`` that the engine does not keep: its owner may change
-    its parameters (``DiffScene``) without affecting ``build`` or ``render``."""
+    its parameters (``DiffScene``) without affecting ``build`` or ``render``. Meshes holding
+    one Material object share one BSDF (drjit traces every live BSDF into each kernel);
+    ``share_bsdfs=False`` gives each mesh its own, under its own parameter keys."""
     import mitsuba as mi
     d: dict = {"type": "scene"}
+    bsdfs: dict | None = {} if share_bsdfs else None
     for name, m in scene.meshes.items():
-        d[name] = _mesh(m)
+        d[name] = _mesh(m, bsdfs)
     for name, c in scene.curves.items():
         d[name] = _curves(c)
     env = environment_dict(scene.environment)
