@@ -51,15 +51,16 @@ def point_triangle_distances(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
 
 
 def crossings(origin: np.ndarray, dirs: np.ndarray, tri: np.ndarray, reach: np.ndarray) -> np.ndarray:
-    """How many triangles (M, 3, 3) each ray (N, 3) from ``origin`` crosses before ``reach`` (N,),
-    written for the tests: the hit on each triangle's plane, kept when it lies on the inner
-    side of all three edges."""
+    """How many triangles (M, 3, 3) each ray (N, 3) from ``origin`` (3,) crosses before ``reach``
+    (N,), written for the tests: the hit on each triangle's plane, kept when it lies on the inner
+    side of all three edges. Edge test at the hit o + t d, expanded so no (N, M, 3) array is
+    made: ((q - p) x (o + t d - p)) . n = ((q - p) x (o - p)) . n + t d . (n x (q - p))."""
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     n = np.cross(b - a, c - a)
     denom = dirs @ n.T                                            # (N, M)
     t = np.einsum("mi,mi->m", a - origin, n)[None] / np.where(np.abs(denom) > 1e-14, denom, np.nan)
-    hit = origin + t[..., None] * dirs[:, None]                   # (N, M, 3)
     inside = np.ones(t.shape, bool)
     for p, q in ((a, b), (b, c), (c, a)):
-        inside &= np.einsum("nmi,mi->nm", np.cross(q - p, hit - p), n) >= 0
+        at_origin = np.einsum("mi,mi->m", np.cross(q - p, origin - p), n)
+        inside &= at_origin[None] + t * (dirs @ np.cross(n, q - p).T) >= 0
     return (inside & (t > 0) & (t < reach[:, None])).sum(1)
