@@ -50,8 +50,8 @@ lint: setup   # ruff, and mypy over the package (settings in pyproject.toml)
 	$(VENV)/bin/ruff check synmitsuba tests bench
 	$(VENV)/bin/mypy
 
-test: setup lint
-	$(PY) -m pytest -q
+test: setup lint   # test files spread over the cores (at most 4 workers: each holds a body model)
+	$(PY) -m pytest -q -n auto --maxprocesses 4 --dist loadfile
 
 test-all: setup
 	$(PY) -m pytest -q -m ''
