@@ -20,6 +20,23 @@ def test_chamfered_box_keeps_its_size_and_bevels_its_edges():
     assert not _inside_convex(m, [0.599, 0.799, 0.249]) and _inside_convex(m, [0.55, 0.75, 0.2])
 
 
+def test_chamfered_boxes_of_any_size_are_the_hull_of_their_three_inset_boxes():
+    """The faces are taken once from a template hull: for random sizes and bevels the box is
+    closed, faces outwards and has the volume and area of qhull's hull of the same corners."""
+    import trimesh
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        w, h, d = rng.uniform(0.02, 5.0, 3)
+        bevel = rng.uniform(0.001, 0.5)
+        m = architecture.chamfer_box(w, h, d, bevel, *rng.normal(size=3))
+        b = min(bevel, w / 3, h / 3, d / 3)
+        corners = np.concatenate([trimesh.creation.box(extents=e).vertices
+                                  for e in ((w, h - 2 * b, d - 2 * b), (w - 2 * b, h, d - 2 * b), (w - 2 * b, h - 2 * b, d))])
+        hull = trimesh.convex.convex_hull(corners)
+        assert m.is_watertight and m.is_winding_consistent and m.volume > 0
+        assert m.volume == pytest.approx(hull.volume, rel=1e-9) and m.area == pytest.approx(hull.area, rel=1e-9)
+
+
 @pytest.mark.parametrize("name, kinds, least_m", [
     ("city_street", {"building", "lamp", "bollard", "kerb", "bench"}, 30.0),
     ("city_park", {"tree2", "bush", "bench"}, 30.0),

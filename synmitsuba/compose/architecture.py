@@ -9,6 +9,7 @@ camera may enter (outside a room, over its ceiling) and ceiling lights.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -30,15 +31,33 @@ def _tm():
     return trimesh
 
 
+def _chamfer_points(w, h, d, b) -> np.ndarray:
+    """The 24 corners of three boxes, each inset by ``b`` on two axes: a chamfered box's hull."""
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], np.float64)
+    return np.concatenate([signs * np.array(ex) / 2 for ex in
+                           ((w, h - 2 * b, d - 2 * b), (w - 2 * b, h, d - 2 * b), (w - 2 * b, h - 2 * b, d))])
+
+
+@functools.lru_cache(maxsize=1)
+def _chamfer_faces() -> np.ndarray:
+    """Outward faces over ``_chamfer_points``' order: one convex hull of a generic chamfered box.
+    Every chamfered box (all sides over twice the bevel) has the same 24 corners on the same
+    faces, so the hull is taken once (qhull cost 2.7 ms a box; city_street has 1,038)."""
+    pts = _chamfer_points(1.0, 1.3, 1.7, 0.1)
+    hull = _tm().convex.convex_hull(pts)
+    index = np.array([int(np.argmin(np.linalg.norm(pts - v, axis=1))) for v in hull.vertices])
+    if len(set(index.tolist())) != len(pts):
+        raise RuntimeError("the chamfered box's template hull lost a corner")
+    return index[hull.faces]
+
+
 def chamfer_box(w, h, d, bevel=0.01, x=0.0, y0=0.0, z=0.0):
     """A box with chamfered edges (the hull of three inset boxes): edges catch light as real
     furniture and kerbs do, where a sharp box reads as a render."""
-    tm = _tm()
     b = min(bevel, w / 3, h / 3, d / 3)
-    pts = []
-    for ex in ((w, h - 2 * b, d - 2 * b), (w - 2 * b, h, d - 2 * b), (w - 2 * b, h - 2 * b, d)):
-        pts.append(tm.creation.box(extents=ex).vertices)
-    return tm.convex.convex_hull(np.concatenate(pts)).apply_translation((x, y0 + h / 2, z))
+    if not b > 0:
+        raise ValueError(f"chamfer_box({w}, {h}, {d}, bevel={bevel}): sides and bevel must be over 0")
+    return _tm().Trimesh(_chamfer_points(w, h, d, b) + (x, y0 + h / 2, z), _chamfer_faces(), process=False)
 
 
 def _cyl(r, h, x=0.0, y0=0.0, z=0.0, sections=16):
