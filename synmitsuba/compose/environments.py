@@ -291,35 +291,30 @@ def _box_uv(mesh) -> np.ndarray:
     return np.where((axis == 0)[:, None], v[:, [2, 1]], np.where((axis == 1)[:, None], v[:, [0, 2]], v[:, [0, 1]]))
 
 
-class _Looks:
-    """One ``Material`` object per look of a scene's objects: a textured (material, colour) is
-    made once, as is each role's and each plain colour's, so the engine loads one BSDF per look
-    (drjit traces a call over every live BSDF: 1,094 of them made a 160x120 frame of
+def _look(looks: dict, key: tuple, make) -> tuple:
+    """``looks[key]``, made on first use: one ``Material`` object per look of a scene's objects
+    (a textured material and colour, a role, a plain colour), so the engine loads one BSDF per
+    look (drjit traces a call over every live BSDF: 1,094 of them made a 160x120 frame of
     ``city_street`` cost 3.6 s)."""
-
-    def __init__(self) -> None:
-        self._made: dict = {}
-
-    def __call__(self, key: tuple, make) -> tuple:
-        if key not in self._made:
-            self._made[key] = make()
-        return self._made[key]
+    if key not in looks:
+        looks[key] = make()
+    return looks[key]
 
 
-def _part_look(obj: EnvObject, role: str, looks: _Looks) -> tuple:
+def _part_look(obj: EnvObject, role: str, looks: dict) -> tuple:
     """(material, uv period or None) of one part of ``obj``."""
     if role == "main" and obj.texture is not None:
-        return looks(("texture", obj.texture, tuple(obj.color)),
+        return _look(looks, ("texture", obj.texture, tuple(obj.color)),
                      lambda: ground_material(obj.texture, obj.color, np.random.default_rng(obj.seed), n=256))
     if role == "main":
-        return looks(("plain", tuple(obj.color), obj.roughness), lambda: (
+        return _look(looks, ("plain", tuple(obj.color), obj.roughness), lambda: (
             Material(base_color=tuple(obj.color), kind="principled", roughness=obj.roughness), None))
     colour, rough, metal = ROLES[role]
-    return looks(("role", role), lambda: (
+    return _look(looks, ("role", role), lambda: (
         Material(base_color=colour, kind="principled", roughness=rough, metallic=metal), None))
 
 
-def _merged_parts(obj: EnvObject, looks: _Looks) -> list:
+def _merged_parts(obj: EnvObject, looks: dict) -> list:
     """``obj``'s parts joined into one mesh per look: [(material, vertices, faces, uv or None)]
     (a tree's twenty branches are one trunk mesh: fewer shapes to trace and to build)."""
     groups: dict = {}
@@ -405,7 +400,7 @@ def add_environment(scene, env: Environment, lighting: SunskyLighting | EnvmapLi
     else:
         centre = ((env.area[0] + env.area[2]) / 2, (env.area[1] + env.area[3]) / 2)
         add_backdrop(scene, lighting, env.backdrop.height_m, env.backdrop.radius_m, centre, env.backdrop.key_light)
-    looks = _Looks()
+    looks: dict = {}   # look -> (Material, uv period or None)
     for i, obj in enumerate(env.objects):
         for n, (mat, v, f, uv) in enumerate(_merged_parts(obj, looks)):
             scene.add_mesh(f"object{i}_{obj.kind}_{n}", v, f, uv=uv, material=mat,
