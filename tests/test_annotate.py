@@ -158,7 +158,7 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
         # COCO-WholeBody's per-part evaluation, as its code does it: each part's points in place of
         # "keypoints" with its own sigmas, over the annotations where the part is valid
         doc = json.loads(out.read_text())
-        for part in ("lefthand", "righthand"):
+        for part, count in (("lefthand", 21), ("righthand", 21), ("face", 68)):
             anns = [{**a, "keypoints": a[f"{part}_kpts"], "num_keypoints": sum(v > 0 for v in a[f"{part}_kpts"][2::3])}
                     for a in doc["annotations"] if a[f"{part}_valid"]]
             assert anns, part
@@ -166,7 +166,7 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
             part_gt.dataset = {**doc, "annotations": anns}
             part_gt.createIndex()
             ev = COCOeval(part_gt, part_gt.loadRes([{**a, "score": 1.0} for a in anns]), "keypoints")
-            ev.params.kpt_oks_sigmas = np.full(21, 0.025)
+            ev.params.kpt_oks_sigmas = np.full(count, 0.025)
             ev.evaluate()
             ev.accumulate()
             ev.summarize()
@@ -174,13 +174,15 @@ def test_coco_export_loads_and_scores_ap_1_with_pycocotools(sm, walker, tmp_path
     for a in doc["annotations"]:
         rec = next(r for r in sm.read_sample(data / f"view{a['image_id'] - 1}").subjects if r["instance"] == a["instance"])
         assert len(a["keypoints"] + a["foot_kpts"] + a["face_kpts"] + a["lefthand_kpts"] + a["righthand_kpts"]) == 133 * 3
-        for side, part in enumerate(("lefthand", "righthand")):
-            k = np.reshape(a[f"{part}_kpts"], (21, 3))
-            seen = rec["hands_visibility"][side] > 0
-            assert np.array_equal(k[:, 2] > 0, seen) and np.allclose(k[seen, :2], rec["hands2d"][side][seen])
+        parts = [("lefthand", rec["hands2d"][0], rec["hands_visibility"][0]),
+                 ("righthand", rec["hands2d"][1], rec["hands_visibility"][1]), ("face", rec["face2d"], rec["face_visibility"])]
+        for part, pts, classes in parts:
+            k = np.reshape(a[f"{part}_kpts"], (len(classes), 3))
+            seen = np.asarray(classes) > 0
+            assert np.array_equal(k[:, 2] > 0, seen) and np.allclose(k[seen, :2], np.asarray(pts)[seen])
             x, y, w, h = a[f"{part}_box"]
             assert ((k[seen, 0] >= x) & (k[seen, 0] <= x + w) & (k[seen, 1] >= y) & (k[seen, 1] <= y + h)).all()
-            assert a[f"{part}_valid"] == bool((rec["hands_visibility"][side] == 1).any())
+            assert a[f"{part}_valid"] == bool((np.asarray(classes) == 1).any())
     sm.export_coco(str(data), str(tmp_path / "index.json"), keypoint_coords="pixel_index")
     index = json.loads((tmp_path / "index.json").read_text())
     assert index["info"]["keypoint_coords"] == "pixel_index"

@@ -340,8 +340,8 @@ def test_loader_carries_body_model_fits_where_records_have_them(sm, tiny, tmp_pa
 
 def test_loader_keypoint_conventions(sm, tiny):
     """OpenPose-25, COCO-17 and COCO-WholeBody layouts from our 23 points: the neck is the
-    shoulders' midpoint (occluded when either shoulder is), WholeBody keeps our 23 first and
-    masks face and hands."""
+    shoulders' midpoint (occluded when either shoulder is), WholeBody keeps our 23 first, then
+    the record's face and hands, cropped as the body's points are."""
     ours = sm.SynDataset(tiny, crop="person", size=64)[0]
     op = sm.SynDataset(tiny, crop="person", size=64, keypoints="openpose25")[0]
     wb = sm.SynDataset(tiny, crop="person", size=64, keypoints="coco_wholebody")[0]
@@ -354,8 +354,17 @@ def test_loader_keypoint_conventions(sm, tiny):
     expect = k[5, 2] if k[5, 2] == k[6, 2] else (0 if 0 in (k[5, 2], k[6, 2]) else max(k[5, 2], k[6, 2]))
     assert o[1, 2] == expect
     assert np.allclose(op["keypoints3d_cam"].numpy()[1], (ours["keypoints3d_cam"].numpy()[5] + ours["keypoints3d_cam"].numpy()[6]) / 2, atol=1e-6)
-    assert wb["keypoints2d"].shape == (133, 3) and int(wb["keypoints_mask"].sum()) == 23
-    assert np.array_equal(wb["keypoints2d"].numpy()[:23], k) and not wb["keypoints2d"].numpy()[23:].any()
+    assert wb["keypoints2d"].shape == (133, 3) and int(wb["keypoints_mask"].sum()) == 133
+    w = wb["keypoints2d"].numpy()
+    assert np.array_equal(w[:23], k)
+    rec = next(r for r in sm.read_sample(sm.SynDataset(tiny, crop="person", size=64)[0]["stem"]).subjects if r["valid"])
+    for rows, pts, classes in ((slice(23, 91), rec["face2d"], rec["face_visibility"]),
+                               (slice(91, 112), rec["hands2d"][0], rec["hands_visibility"][0])):
+        assert np.array_equal(w[rows, 2], classes)
+        # the crop maps image points as it maps the body's: a scale and a shift, fitted on those
+        A = np.c_[np.asarray(rec["keypoints2d"]), np.ones(23)]
+        fit = np.linalg.lstsq(A, k[:, :2], rcond=None)[0]
+        assert np.allclose(np.c_[np.asarray(pts), np.ones(len(pts))] @ fit, w[rows, :2], atol=1e-3)
     assert np.array_equal(c17["keypoints2d"].numpy(), k[:17])
     whole = sm.SynDataset(tiny, modalities=["depth"], keypoints="openpose25")[0]
     assert whole["keypoints2d"].shape[1:] == (25, 3)

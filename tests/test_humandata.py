@@ -22,6 +22,13 @@ SMPLX = {"body_pose": (21, 3), "global_orient": (3,), "betas": (10,), "transl": 
 # human_data indices of COCO-17 (mmhuman3d maps COCO's hips to left_hip_extra / right_hip_extra),
 # then COCO-WholeBody's feet (left big toe, small toe, heel, then right), from its HUMAN_DATA list
 HUMAN_DATA_INDEX = [55, 57, 56, 59, 58, 16, 17, 18, 19, 20, 21, 145, 144, 4, 5, 7, 8, 60, 61, 62, 63, 64, 65]
+# the face's 68 (300W order): right_contour_1 .. left_contour_1 are 127-143, right_eyebrow_1 .. lip_bottom
+# (brows, nose bridge and base, eyes, outer and inner lips, in 300W's order) 76-126
+FACE_INDEX = list(range(127, 144)) + list(range(76, 127))
+# each hand's points after the wrist (thumb CMC MCP IP tip, index, middle, ring, pinky MCP PIP DIP tip):
+# left_thumb_1 = 37, left_index_1 = 25, left_middle_1 = 28, left_ring_1 = 34, left_pinky_1 = 31, tips 66-70
+LEFT_HAND_INDEX = [37, 38, 39, 66, 25, 26, 27, 67, 28, 29, 30, 68, 34, 35, 36, 69, 31, 32, 33, 70]
+RIGHT_HAND_INDEX = [52, 53, 54, 71, 40, 41, 42, 72, 43, 44, 45, 73, 49, 50, 51, 74, 46, 47, 48, 75]
 
 
 def load_like_human_data(path):
@@ -86,7 +93,7 @@ def test_humandata_layout_key_by_key(fitted, sm):
     assert hd["misc"]["flat_hand_mean"] is True and hd["misc"]["kps3d_root_aligned"] is False
     assert list(hd["has_smplx"]) == [1, 0, 0, 0]  # sequence 0 frame 0 fitted, frame 2 flagged, sequence 1 none
     mask = np.zeros(190, np.uint8)
-    mask[HUMAN_DATA_INDEX] = 1
+    mask[HUMAN_DATA_INDEX + FACE_INDEX + LEFT_HAND_INDEX + RIGHT_HAND_INDEX] = 1
     assert np.array_equal(hd["keypoints2d_mask"], mask) and np.array_equal(hd["keypoints3d_mask"], mask)
     assert not hd["keypoints2d"][:, mask == 0].any() and not hd["keypoints3d"][:, mask == 0].any()
 
@@ -105,6 +112,14 @@ def test_humandata_values_match_the_samples(fitted, sm):
         assert np.allclose(kp2[:, :2], rec["keypoints2d"], atol=1e-3)
         assert np.array_equal(kp2[:, 2], (rec["visibility"] > 0).astype(np.float32))
         assert np.allclose(kp3[:, :3], rec["keypoints3d_cam"], atol=1e-5) and (kp3[:, 3] == 1).all()
+        parts = [(FACE_INDEX, rec["face2d"], rec["face3d_cam"], rec["face_visibility"])]
+        parts += [(index, rec["hands2d"][h], rec["hands3d_cam"][h][1:], rec["hands_visibility"][h])
+                  for h, index in enumerate((LEFT_HAND_INDEX, RIGHT_HAND_INDEX))]
+        for index, p2, p3, classes in parts:
+            p2, classes = np.asarray(p2)[-len(index):], np.asarray(classes)[-len(index):]
+            assert np.allclose(hd["keypoints2d"][i, index, :2], p2, atol=1e-3)
+            assert np.array_equal(hd["keypoints2d"][i, index, 2], (classes > 0).astype(np.float32))
+            assert np.allclose(hd["keypoints3d"][i, index, :3], p3, atol=1e-5) and (hd["keypoints3d"][i, index, 3] == 1).all()
         x0, y0, x1, y1 = rec["bbox_visible"]
         assert np.allclose(hd["bbox_xywh"][i], [x0, y0, x1 - x0, y1 - y0, 1], atol=1e-3)
         K = sample.camera.K

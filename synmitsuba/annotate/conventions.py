@@ -22,7 +22,8 @@ _K = {name: i for i, name in enumerate(KEYPOINTS)}
 @dataclass(frozen=True)
 class Convention:
     names: tuple[str, ...]
-    sources: tuple[tuple[int, ...], ...]  # per output point: our keypoint indices averaged (() = unlabelled)
+    sources: tuple[tuple[int, ...], ...]  # per output point: source row indices averaged (() = unlabelled)
+    rows: str = "body"  # what the sources index: "body" (our 23 keypoints) or "whole" (``whole_body_rows``)
 
     @property
     def mask(self) -> np.ndarray:
@@ -50,12 +51,30 @@ CONVENTIONS: dict[str, Convention] = {
     "ours": _named([(n, [n]) for n in KEYPOINTS]),
     "coco17": _named([(n, [n]) for n in KEYPOINTS[:17]]),
     "coco_wholebody": Convention(KEYPOINTS + tuple(_WHOLEBODY_REST),
-                                 tuple((i,) for i in range(len(KEYPOINTS))) + ((),) * len(_WHOLEBODY_REST)),
+                                 tuple((i,) for i in range(len(KEYPOINTS) + len(_WHOLEBODY_REST))), rows="whole"),
     "openpose25": _named(_BODY25),
 }
 
 
 JOINT_CONVENTIONS = ("smpl24",)
+
+
+def whole_body_rows(rec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A record's 133 COCO-WholeBody rows: 2D (133, 2), camera-frame 3D (133, 3) and classes
+    (133,): our 23 keypoints, the face's 68, the left then the right hand's 21. A record written
+    before the face or the hands were labelled has those rows at 0 with class 0."""
+    parts = [(rec["keypoints2d"], rec["keypoints3d_cam"], rec["visibility"], 23)]
+    face, hands = rec.get("face2d", []), rec.get("hands2d", [])
+    parts.append((face, rec.get("face3d_cam"), rec.get("face_visibility"), 68) if len(face) else (None, None, None, 68))
+    for side in (0, 1):
+        parts.append((hands[side], rec["hands3d_cam"][side], rec["hands_visibility"][side], 21) if len(hands)
+                     else (None, None, None, 21))
+    p2, p3, cls = [], [], []
+    for a, b, c, n in parts:
+        p2.append(np.zeros((n, 2)) if a is None else np.asarray(a, np.float64))
+        p3.append(np.zeros((n, 3)) if b is None else np.asarray(b, np.float64))
+        cls.append(np.zeros(n, np.uint8) if c is None else np.asarray(c, np.uint8))
+    return np.concatenate(p2), np.concatenate(p3), np.concatenate(cls)
 
 
 @functools.cache
@@ -74,8 +93,9 @@ def joint_names(convention: str) -> tuple[str, ...]:
 
 
 def convert_keypoints(points: np.ndarray, classes: np.ndarray, convention: str) -> tuple[np.ndarray, np.ndarray]:
-    """Our keypoints (..., 23, D) and visibility classes (..., 23) in ``convention``: (..., K, D)
-    and (..., K); unlabelled points are 0 with class 0 (see ``Convention.mask``)."""
+    """Our keypoints (..., 23, D) and visibility classes (..., 23) (or, for a convention over
+    ``rows="whole"``, the 133 of ``whole_body_rows``) in ``convention``: (..., K, D) and (..., K);
+    unlabelled points are 0 with class 0 (see ``Convention.mask``)."""
     conv = CONVENTIONS[convention]
     points, classes = np.asarray(points), np.asarray(classes)
     out = np.zeros(points.shape[:-2] + (len(conv.names), points.shape[-1]), points.dtype)

@@ -77,6 +77,10 @@ class SubjectLabels(_Record):
     hands3d_cam: np.ndarray = _array()                 # (2, 21, 3)
     hands2d: np.ndarray = _array()                     # (2, 21, 2) pixels
     hands_visibility: np.ndarray = _array(np.uint8)    # (2, 21) annotate.keypoints.VISIBILITY classes
+    face3d_world: np.ndarray = _array()                # (68, 3) face points (COCO-WholeBody's 300W order)
+    face3d_cam: np.ndarray = _array()                  # (68, 3)
+    face2d: np.ndarray = _array()                      # (68, 2) pixels
+    face_visibility: np.ndarray = _array(np.uint8)     # (68,) annotate.keypoints.VISIBILITY classes
     expression: np.ndarray = _array()                  # (52,) ARKit face unit weights (body.expressions.FACE_UNITS)
     valid: bool = False
     layer_pixels: dict = field(default_factory=dict)   # visible pixels per layer name

@@ -18,6 +18,7 @@ from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_m
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
                                       build_garment, garment_offset, metres_per_uv)
+from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.hand_points import HandPoints, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
@@ -449,6 +450,18 @@ class LayeredHuman:
         (``body.hand_points``): the wrist, then thumb to pinky from the knuckle to the tip."""
         T = self._transforms(rotations, root_translation)
         return self._hand_points.posed(T, self.skeleton.rest_positions, self.body.vertices, self.body.weights)
+
+    @functools.cached_property
+    def _face_point_rows(self) -> np.ndarray:
+        return face_rows(self.split.source)
+
+    def face_keypoints(self, rotations=None, root_translation=None, face=None) -> np.ndarray:
+        """(68, 3) world points of the face in COCO-WholeBody's 300W order (``body.face_points``):
+        the body's own skin vertices, moved by the ARKit weights ``face`` as the render is."""
+        T = self._transforms(rotations, root_translation)
+        face = None if face is None or not np.any(face) else np.asarray(face, dtype=np.float64)
+        rows = self._face_point_rows
+        return skin(self._face_moved(face)[0][rows], self.parts[0].skinning_weights[rows], T)
 
     def gaze(self, rotations=None, root_translation=None) -> np.ndarray:
         """(2, 3) unit world gaze of the left and right eye: each eye bone's +z."""

@@ -18,7 +18,8 @@ last).
   ``body_rotations_cam``, ``body_root_cam``, ``mask`` (size, size) of the subject, the crop's
   ``K`` (the camera's, shifted and scaled), ``center``, ``scale``.
 - ``keypoints``: the layout of ``keypoints2d`` / ``keypoints3d_cam``: ``ours`` (23), ``coco17``,
-  ``coco_wholebody`` (133; face and hands masked out), ``openpose25`` (neck and mid-hip the
+  ``coco_wholebody`` (133: ours, the face's 68 and both hands' 21; rows a sample
+  written before those labels lacks are 0 with class 0), ``openpose25`` (neck and mid-hip the
   means of shoulders and hips), ``smpl24`` (the skeleton joints SMPL's 24 correspond to,
   projected; no occlusion class: 1 inside the image, 0 outside); ``keypoints_mask`` says which points are labelled
   (``annotate.conventions``).
@@ -213,15 +214,19 @@ def _codes(classes: np.ndarray, visibility: str) -> np.ndarray:
 
 def _keypoints(rec, convention: str, camera):
     """(2D (K, 2), 3D camera frame (K, 3), classes (K,), mask (K,)) in ``convention``."""
-    from synmitsuba.annotate.conventions import CONVENTIONS, JOINT_CONVENTIONS, convert_keypoints, smpl24_bones
+    from synmitsuba.annotate.conventions import (CONVENTIONS, JOINT_CONVENTIONS, convert_keypoints, smpl24_bones,
+                                                 whole_body_rows)
     if convention in JOINT_CONVENTIONS:  # skeleton joints, projected; inside the image or not
         cam = np.asarray(rec["joints3d_cam"])[list(smpl24_bones())]
         uvw = cam @ camera.K.T
         uv = uvw[:, :2] / np.where(np.abs(uvw[:, 2:]) > 1e-9, uvw[:, 2:], 1e-9)
         inside = (cam[:, 2] > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < camera.width) & (uv[:, 1] >= 0) & (uv[:, 1] < camera.height)
         return uv, cam, inside.astype(np.uint8), np.ones(len(cam), np.uint8)
-    both = np.concatenate([np.asarray(rec["keypoints2d"]), np.asarray(rec["keypoints3d_cam"])], 1)
-    pts, vis = convert_keypoints(both, rec["visibility"], convention)
+    if CONVENTIONS[convention].rows == "whole":
+        p2, p3, classes = whole_body_rows(rec)
+    else:
+        p2, p3, classes = np.asarray(rec["keypoints2d"]), np.asarray(rec["keypoints3d_cam"]), rec["visibility"]
+    pts, vis = convert_keypoints(np.concatenate([p2, p3], 1), classes, convention)
     return pts[:, :2], pts[:, 2:], vis, CONVENTIONS[convention].mask
 
 

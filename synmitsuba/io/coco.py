@@ -7,10 +7,10 @@ v = 2 visible, 1 in the image but occluded (by itself, a subject or an object), 
 uncompressed RLE (column-major runs, starting with background); its area and tight box
 [x, y, w, h]; the amodal box in ``bbox_amodal``. ``pycocotools`` reads and evaluates the file.
 COCO-WholeBody's fields come with it: ``lefthand_kpts`` / ``righthand_kpts`` (21 x 3, its order),
-``lefthand_box`` / ``righthand_box`` (the hand's points in the image, padded by ``HAND_PAD`` of the
-larger side, [x, y, w, h]; zeros when none) and ``*_valid`` (some point of that hand visible);
-``face_kpts`` (68 x 3) and ``face_box`` are written unlabelled (v = 0, ``face_valid`` false)
-until the face's 68 points exist, so WholeBody loaders read the file and ignore the face.
+``face_kpts`` (68 x 3, 300W's order), ``lefthand_box`` / ``righthand_box`` / ``face_box`` (the
+part's points in the image, padded by ``HAND_PAD`` of the larger side, [x, y, w, h]; zeros when
+none) and ``*_valid`` (some point of that part visible). A sample written before a part's labels
+existed gets it unlabelled (v = 0, not valid), so WholeBody loaders still read the file.
 
 Keypoint coordinates: ``"continuous"`` (default, as in every sample: pixel (0, 0) spans
 [0, 1) x [0, 1), so a pixel's centre is at +0.5) or ``"pixel_index"`` (0.5 less: the centre of
@@ -59,16 +59,13 @@ def _keypoints(rec: dict, first: int, count: int, shift: float = 0.0) -> list:
     return out
 
 
-HAND_PAD = 0.1  # a hand box: its points' box grown by this share of its larger side on every side
-FACE_POINTS = 68
+HAND_PAD = 0.1  # a hand's or the face's box: its points' box grown by this share of its larger side on every side
+from synmitsuba.body.face_points import FACE_POINTS  # noqa: E402  (re-exported: tests read it here)
 
 
-def _hand(rec: dict, side: int, shift: float, width: int, height: int) -> dict:
-    """One hand's COCO-WholeBody fields from a record's ``hands2d`` / ``hands_visibility``."""
-    name = ("lefthand", "righthand")[side]
-    if "hands2d" not in rec or len(rec["hands2d"]) == 0:  # a sample written before hand labels
-        return {f"{name}_kpts": [0.0, 0.0, 0] * 21, f"{name}_box": [0.0, 0.0, 0.0, 0.0], f"{name}_valid": False}
-    pts, classes = np.asarray(rec["hands2d"])[side], np.asarray(rec["hands_visibility"])[side]
+def _part(name: str, pts: np.ndarray, classes: np.ndarray, shift: float, width: int, height: int) -> dict:
+    """COCO-WholeBody's ``<name>_kpts``, ``<name>_box`` and ``<name>_valid`` from a part's points
+    (K, 2) and visibility classes (K,)."""
     flags = coco_flags(classes)
     kpts: list = []
     for (x, y), flag in zip(pts, flags):
@@ -81,6 +78,26 @@ def _hand(rec: dict, side: int, shift: float, width: int, height: int) -> dict:
         lo, hi = np.maximum(lo - pad, 0), np.minimum(hi + pad, [width, height])
         box = [float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1])]
     return {f"{name}_kpts": kpts, f"{name}_box": box, f"{name}_valid": bool((classes == 1).any())}
+
+
+def _unlabelled(name: str, count: int) -> dict:
+    """A part a sample written before its labels lacks: v = 0 everywhere, not valid."""
+    return {f"{name}_kpts": [0.0, 0.0, 0] * count, f"{name}_box": [0.0, 0.0, 0.0, 0.0], f"{name}_valid": False}
+
+
+def _hand(rec: dict, side: int, shift: float, width: int, height: int) -> dict:
+    """One hand's COCO-WholeBody fields from a record's ``hands2d`` / ``hands_visibility``."""
+    name = ("lefthand", "righthand")[side]
+    if len(rec.get("hands2d", [])) == 0:
+        return _unlabelled(name, 21)
+    return _part(name, np.asarray(rec["hands2d"])[side], np.asarray(rec["hands_visibility"])[side], shift, width, height)
+
+
+def _face(rec: dict, shift: float, width: int, height: int) -> dict:
+    """The face's COCO-WholeBody fields from a record's ``face2d`` / ``face_visibility``."""
+    if len(rec.get("face2d", [])) == 0:
+        return _unlabelled("face", FACE_POINTS)
+    return _part("face", np.asarray(rec["face2d"]), np.asarray(rec["face_visibility"]), shift, width, height)
 
 
 def _xywh(box: list | None) -> list | None:
@@ -99,7 +116,7 @@ def _annotation(rec: dict, sample, image_id: int, ann_id: int, shift: float) -> 
             "keypoints": kps, "num_keypoints": int(sum(1 for v in kps[2::3] if v > 0)),
             "foot_kpts": _keypoints(rec, 17, 6, shift), "bbox_amodal": _xywh(rec["bbox_amodal"]), "instance": rec["instance"],
             "visible_fraction": rec["visible_fraction"],
-            "face_kpts": [0.0, 0.0, 0] * FACE_POINTS, "face_box": [0.0, 0.0, 0.0, 0.0], "face_valid": False,
+            **_face(rec, shift, sample.camera.width, sample.camera.height),
             **_hand(rec, 0, shift, sample.camera.width, sample.camera.height),
             **_hand(rec, 1, shift, sample.camera.width, sample.camera.height)}
 

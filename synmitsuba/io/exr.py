@@ -19,6 +19,7 @@ import numpy as np
 from synmitsuba.annotate.labels import SubjectLabels
 from synmitsuba.body.anny_model import KEYPOINTS
 from synmitsuba.body.expressions import FACE_UNITS
+from synmitsuba.body.face_points import face_keypoint_names
 from synmitsuba.body.hand_points import hand_keypoint_names
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.files import atomic_path
@@ -79,6 +80,7 @@ def _sidecar(sample: Sample) -> dict:
     if sample.subjects:  # what each row of the keypoint arrays is
         side["keypoint_names"] = list(KEYPOINTS)
         side["hand_keypoint_names"] = [list(hand_keypoint_names(s)) for s in ("left", "right")]
+        side["face_keypoint_names"] = list(face_keypoint_names())
         side["expression_names"] = list(FACE_UNITS)
     return side
 

@@ -5,8 +5,10 @@ for mmhuman3d reads our data unchanged.
 - ``image_path``: relative to a data root (the dataset folder unless told), as mmhuman3d joins
   it onto ``<data_prefix>/datasets/<dataset_name>/``.
 - ``keypoints2d`` (N, 190, 3) / ``keypoints3d`` (N, 190, 4) in mmhuman3d's ``human_data``
-  convention: our 23 keypoints in their named slots (``HUMAN_DATA_SLOTS``), the rest zero and
-  masked out by ``keypoints2d_mask`` / ``keypoints3d_mask`` (190,).
+  convention: our 23 keypoints in their named slots (``HUMAN_DATA_SLOTS``), the face's 68
+  (``FACE_SLOTS``: human_data's brows, nose, eyes, lips and contour) and each hand's 20 finger
+  points (``LEFT_HAND_SLOTS`` / ``RIGHT_HAND_SLOTS``; the wrist is the body's); the rest zero
+  and masked out by ``keypoints2d_mask`` / ``keypoints3d_mask`` (190,).
 - ``smplx`` / ``smpl``: dicts of (N, ...) arrays in the camera frame, written when a fit exists;
   ``has_smplx`` / ``has_smpl`` (N,) say which rows have a fit that passed its error threshold.
 - ``meta``: per-row values (gender, camera, instance, frame, visibility classes, crop centre
@@ -21,6 +23,7 @@ import os
 
 import numpy as np
 
+from synmitsuba.annotate.conventions import whole_body_rows
 from synmitsuba.body.anny_model import KEYPOINTS
 from synmitsuba.errors import ConfigError
 from synmitsuba.io.exr import read_sample
@@ -42,24 +45,41 @@ HUMAN_DATA_SLOTS: dict[str, tuple[str, int]] = {
     "left_big_toe": ("left_bigtoe", 60), "left_small_toe": ("left_smalltoe", 61), "left_heel": ("left_heel", 62),
     "right_big_toe": ("right_bigtoe", 63), "right_small_toe": ("right_smalltoe", 64), "right_heel": ("right_heel", 65),
 }
-_SLOTS = np.array([HUMAN_DATA_SLOTS[k][1] for k in KEYPOINTS])
+# COCO-WholeBody's face (300W order) -> human_data: the brows, nose, eyes and lips (points 17-67)
+# lie in that order from its right_eyebrow_1 (76); the jaw line (0-16) from right_contour_1 (127)
+FACE_SLOTS = [127 + k for k in range(17)] + [76 + k for k in range(51)]
+# a hand's 21 points (COCO-WholeBody order: wrist, thumb CMC MCP IP tip, then index, middle, ring,
+# pinky MCP PIP DIP tip) -> human_data's left hand; -1: the wrist, which the body's keypoint fills.
+# Joints: *_1.._3 from left_index_1 (25): index, middle, pinky, ring, thumb; tips from left_thumb (66)
+_FINGER_JOINTS = {"thumb": 37, "index": 25, "middle": 28, "ring": 34, "pinky": 31}
+_FINGER_TIPS = {"thumb": 66, "index": 67, "middle": 68, "ring": 69, "pinky": 70}
+LEFT_HAND_SLOTS = [-1] + [slot for f in ("thumb", "index", "middle", "ring", "pinky")
+                          for slot in (_FINGER_JOINTS[f], _FINGER_JOINTS[f] + 1, _FINGER_JOINTS[f] + 2, _FINGER_TIPS[f])]
+RIGHT_HAND_SLOTS = [-1] + [s + (15 if s < 55 else 5) for s in LEFT_HAND_SLOTS[1:]]  # right_index_1 = 40, right_thumb = 71
+# every row of ``annotate.conventions.whole_body_rows`` (ours, face, left hand, right hand)
+_SLOTS = np.array([HUMAN_DATA_SLOTS[k][1] for k in KEYPOINTS] + FACE_SLOTS + LEFT_HAND_SLOTS + RIGHT_HAND_SLOTS)
 BODY_MODEL_KEYS = ("betas", "global_orient", "body_pose", "transl", "left_hand_pose", "right_hand_pose", "jaw_pose",
                    "leye_pose", "reye_pose", "expression")
 GENDER_CODES = {"male": "m", "female": "f", "neutral": "n"}  # as 3DPW writes them; mmhuman3d tests == "m"
 
 
 def to_human_data(points: np.ndarray, confidence: np.ndarray) -> np.ndarray:
-    """(N, 23, D) points and (N, 23) confidence -> (N, 190, D + 1) in human_data's slots."""
-    n, _, d = points.shape
+    """(N, 133, D) whole-body points (``whole_body_rows``; or our 23 alone, (N, 23, D)) and
+    (N, R) confidence -> (N, 190, D + 1) in human_data's slots."""
+    n, r, d = points.shape
+    slots = _SLOTS[:r]
+    keep = slots >= 0
     out = np.zeros((n, HUMAN_DATA_SIZE, d + 1), np.float32)
-    out[:, _SLOTS, :d] = points
-    out[:, _SLOTS, d] = confidence
+    out[:, slots[keep], :d] = points[:, keep]
+    out[:, slots[keep], d] = confidence[:, keep]
     return out
 
 
-def human_data_mask() -> np.ndarray:
+def human_data_mask(rows: int = 133) -> np.ndarray:
+    """(190,) 1 in the slots the first ``rows`` whole-body rows fill."""
     mask = np.zeros(HUMAN_DATA_SIZE, np.uint8)
-    mask[_SLOTS] = 1
+    slots = _SLOTS[:rows]
+    mask[slots[slots >= 0]] = 1
     return mask
 
 
@@ -151,13 +171,17 @@ def export_humandata(dataset_dir: str, out_npz: str, data_root: str | None = Non
     rows, paths = _rows(os.fspath(dataset_dir), data_root)
     if not rows:
         raise ConfigError("dataset_dir", dataset_dir, "no valid subject in any sample; nothing to export")
-    kps2d = np.array([rec["keypoints2d"] for _, rec in rows], np.float32)
-    kps3d = np.array([rec["keypoints3d_cam"] for _, rec in rows], np.float32)
-    inside = np.array([rec["visibility"] > 0 for _, rec in rows], np.float32)
+    whole = [whole_body_rows(rec) for _, rec in rows]
+    kps2d = np.array([p2 for p2, _, _ in whole], np.float32)
+    kps3d = np.array([p3 for _, p3, _ in whole], np.float32)
+    inside = np.array([c > 0 for _, _, c in whole], np.float32)
+    labelled = np.array([[len(rec.get("face2d", [])) > 0] * 68 + [len(rec.get("hands2d", [])) > 0] * 42
+                         for _, rec in rows], np.float32).reshape(len(rows), -1)
+    in_3d = np.concatenate([np.ones((len(rows), 23), np.float32), labelled], 1)  # 3D: every labelled point
     doc: dict = {"__key_strict__": False, "__data_len__": len(rows), "__keypoints_compressed__": False,
                  "config": "synmitsuba", "image_path": np.array(paths),
                  "bbox_xywh": np.array([_box(rec) for _, rec in rows], np.float32),
-                 "keypoints2d": to_human_data(kps2d, inside), "keypoints3d": to_human_data(kps3d, np.ones_like(inside)),
+                 "keypoints2d": to_human_data(kps2d, inside), "keypoints3d": to_human_data(kps3d, in_3d),
                  "keypoints2d_mask": human_data_mask(), "keypoints3d_mask": human_data_mask(),
                  "keypoints2d_convention": "human_data", "keypoints3d_convention": "human_data",
                  "anny": _anny(rows),
