@@ -3,6 +3,7 @@ equal total spp (sub-frames share it), labelled or not. Prints JSON: seconds per
 first frame, with its kernel compiles, left out) and the blurred / sharp ratio.
 
     python bench/motion_blur.py [--config configs/demo.yaml] [--spp 32] [--res 320x240] [--subframes 8] [--denoise oidn]
+                                [--frames 5] [--what both|rgb|labelled]
 """
 import argparse
 import json
@@ -27,6 +28,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--subframes", type=int, default=8)
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--denoise", default="none", help="none or oidn (guides traced per sub-frame too)")
+    ap.add_argument("--what", default="both", choices=["both", "rgb", "labelled"],
+                    help="RGB and exact passes, with labels and flow, or both (large frames: one at a time)")
     args = ap.parse_args(argv)
     import synmitsuba as sm
     from synmitsuba.generate.config import load_generate_config
@@ -38,7 +41,7 @@ def main(argv=None) -> dict:
     spec.views[0].cameras = [c.resized(w, h) for c in spec.views[0].cameras]
     frames = list(range(0, 2 * args.frames, 2))
     result = {"variant": variant, "denoise": args.denoise, "spp": args.spp, "res": args.res, "subframes": args.subframes, "subjects": len(spec.subjects)}
-    for annotate in (False, True):
+    for annotate in {"both": (False, True), "rgb": (False,), "labelled": (True,)}[args.what]:
         sharp = frame_times(spec, frames, args.spp, 0.0, args.subframes, annotate, args.denoise)
         blur = frame_times(spec, frames, args.spp, 0.5, args.subframes, annotate, args.denoise)
         key = "labelled" if annotate else "rgb_and_passes"

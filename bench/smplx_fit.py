@@ -4,7 +4,11 @@ Reports seconds per subject for the shape step and per frame for the pose step (
 60-frame clip under a minute on 2 cores), and the distribution of per-frame mean and max
 surface distance (mm), joint error (mm), pose error against the known pose (degrees, body
 joints) and the world rotation error of the distal joints (ankles, feet, wrists: the errors
-along the chain add up there). Prints JSON.
+along the chain add up there). Each clip gets the hand and face tracks composition draws for
+it (``--no-tracks``: flat hands and a still face, as before issue 33): the fingers' pose error,
+the hand and face vertices' surface distance, and the fitted expression's face displacement
+error (RMS over the vertices the units move, mm) against the best the file's basis can do and
+against a neutral face. Prints JSON.
 
     python bench/smplx_fit.py [--subjects 10] [--motions walk,wave,squat] [--seconds 2]
     python bench/smplx_fit.py --figure docs/smplx_fit.png   # a look at one fitted frame
@@ -38,6 +42,30 @@ def _global(local: np.ndarray, parents) -> np.ndarray:
     return out
 
 
+def _tracked(clip, rng):
+    """The clip with the hand and face tracks composition would draw for it."""
+    from synmitsuba.compose.subjects import draw_face, draw_hands
+    from synmitsuba.motion.faces import with_face
+    from synmitsuba.motion.hands import with_hands
+    clip = with_hands(clip, draw_hands(rng, clip))
+    return with_face(clip, draw_face(rng, clip))
+
+
+def _expression_mm(model, weights: np.ndarray, fitted: np.ndarray) -> dict:
+    """Per frame, the RMS (mm, over the vertices anny's units move) of the file's expression
+    displacement against anny's: fitted, the least-squares best and neutral."""
+    from synmitsuba.body.expressions import face_units
+    units = face_units()
+    E = model.exprdirs[units.vertices].reshape(-1, model.exprdirs.shape[2])
+    out: dict = {"fitted": [], "best": [], "neutral": []}
+    for w, e in zip(weights, fitted):
+        d = units.displacement(w).ravel()
+        best = np.linalg.lstsq(E, d, rcond=None)[0]
+        for k, x in (("fitted", e), ("best", best), ("neutral", np.zeros_like(best))):
+            out[k].append(np.sqrt(((E @ x - d).reshape(-1, 3) ** 2).sum(1).mean()) * 1000)
+    return {k: np.array(v) for k, v in out.items()}
+
+
 def main(argv=None) -> int:
     import synmitsuba as sm
     from synmitsuba.annotate.smplx_solve import FitSettings, fit_frames, fit_shape
@@ -50,6 +78,7 @@ def main(argv=None) -> int:
     ap.add_argument("--motions", default="walk,wave,squat")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--figure", help="draw one walking frame's fit into this PNG instead")
+    ap.add_argument("--no-tracks", action="store_true", help="no hand or face tracks on the clips")
     args = ap.parse_args(argv)
     if args.figure:
         return figure(args.figure)
@@ -57,7 +86,7 @@ def main(argv=None) -> int:
     path = write_anny_model(folder, "smplx", rest="tpose")
     model = load_model(folder)
     shape_s, pose_s, frames, mean_mm, max_mm, joint_mm, pose_deg, clips = [], [], 0, [], [], [], [], []
-    distal_deg = []
+    distal_deg, finger_deg, hand_mm, face_mm, expr_mm = [], [], [], [], {"fitted": [], "best": [], "neutral": []}
     parents = [int(p) for p in model.parents]
     distal = [model.joint_names.index(n) for n in DISTAL]
     for s in range(args.subjects):
@@ -67,6 +96,8 @@ def main(argv=None) -> int:
         shape_s.append(time.perf_counter() - t0)
         for motion in args.motions.split(","):
             clip = sm.retarget(load_motion(motion, np.random.default_rng(s), seconds=args.seconds), human.skeleton)
+            if not args.no_tracks:
+                clip = _tracked(clip, np.random.default_rng(50 + s))
             t0 = time.perf_counter()
             fit = fit_frames(shape, human.body, clip, np.arange(clip.n_frames), FitSettings())
             dt = time.perf_counter() - t0
@@ -80,6 +111,11 @@ def main(argv=None) -> int:
             g_err = matrix_to_axis_angle(np.swapaxes(_global(truth, parents)[:, distal], -1, -2) @ fitted)
             distal_deg.append(np.degrees(np.linalg.norm(g_err, axis=-1)))
             mean_mm.append(fit.surface_mean_mm), max_mm.append(fit.surface_max_mm), joint_mm.append(fit.joint_mm)
+            finger_deg.append(np.degrees(np.linalg.norm(err, axis=-1))[:, 25:55].mean(1))
+            hand_mm.append(fit.hand_mm), face_mm.append(fit.face_mm)
+            if clip.face is not None:
+                for k, v in _expression_mm(model, clip.face, fit.expression).items():
+                    expr_mm[k].append(v)
     os.remove(path)
     print(json.dumps({"bench": "smplx_fit", "model": "synthetic SMPL-X from anny (T-pose rest)",
                       "subjects": args.subjects, "motions": args.motions.split(","), "frames": frames,
@@ -90,6 +126,9 @@ def main(argv=None) -> int:
                       "surface_mean_mm": _pct(mean_mm), "surface_max_mm": _pct(max_mm), "joint_mm": _pct(joint_mm),
                       "pose_error_deg": _pct(pose_deg),
                       "distal_global_rotation_error_deg": {"joints": list(DISTAL), **_pct(distal_deg)},
+                      "finger_pose_error_deg": _pct(finger_deg), "hand_surface_mm": _pct(hand_mm),
+                      "face_surface_mm": _pct(face_mm),
+                      "expression_displacement_rms_mm": {k: _pct(v) for k, v in expr_mm.items() if v},
                       "flagged_over_10mm": int(sum((m > 10).sum() for m in mean_mm))}, indent=1))
     return 0
 

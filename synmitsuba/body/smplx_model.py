@@ -36,6 +36,7 @@ KINDS = {"smplx": ("SMPLX", "SMPLX_MODEL_PATH", "smpl-x.is.tue.mpg.de"),
          "smpl": ("SMPL", "SMPL_MODEL_PATH", "smpl.is.tue.mpg.de")}
 GENDERS = ("neutral", "male", "female")
 SHAPE_BASIS = {"smplx": 300, "smpl": 300}  # shapedirs columns before the expression basis (SMPL-X)
+LEGACY_SMPLX_DIRS = 20  # SMPL-X v1.0 files: 10 shape and 10 expression columns (as the smplx package reads them)
 
 
 def _model_root(kind: str, path: str | None) -> tuple[str, str]:
@@ -127,6 +128,8 @@ def load_model(path: str | None = None, gender: str = "neutral", kind: str = "sm
     V = len(v)
     dirs = np.asarray(data["shapedirs"], np.float64)
     n_shape = min(dirs.shape[2], SHAPE_BASIS[kind])
+    if kind == "smplx" and dirs.shape[2] == LEGACY_SMPLX_DIRS:  # SMPL-X v1.0: 10 shape, then 10 expression
+        n_shape = LEGACY_SMPLX_DIRS // 2
     J = np.asarray(data["J_regressor"], np.float64)
     weights = np.asarray(data["weights"], np.float64)
     parents = np.asarray(data["kintree_table"])[0].astype(np.int64)
