@@ -64,3 +64,12 @@ def crossings(origin: np.ndarray, dirs: np.ndarray, tri: np.ndarray, reach: np.n
         at_origin = np.einsum("mi,mi->m", np.cross(q - p, origin - p), n)
         inside &= at_origin[None] + t * (dirs @ np.cross(n, q - p).T) >= 0
     return (inside & (t > 0) & (t < reach[:, None])).sum(1)
+
+
+def unit_weights(**units: float) -> np.ndarray:
+    """The 52 ARKit face unit weights with the named ones set (``jawOpen=0.7``), the rest 0."""
+    from synmitsuba.body.expressions import FACE_UNITS
+    w = np.zeros(len(FACE_UNITS))
+    for name, v in units.items():
+        w[FACE_UNITS.index(name)] = v
+    return w

