@@ -9,6 +9,7 @@ _EXPORTS = {"SubjectRecipe": "synmitsuba.body.recipe", "sample_subject": "synmit
             "ACCESSORY_KINDS": "synmitsuba.body.accessories:BUILDERS", "EyeParams": "synmitsuba.body.eyes",
             "GazeTarget": "synmitsuba.body.eyes", "aim_eyes": "synmitsuba.body.eyes",
             "BrowParams": "synmitsuba.body.brows", "FACE_UNITS": "synmitsuba.body.expressions",
-            "HAND_KEYPOINTS": "synmitsuba.body.hand_points"}
+            "HAND_KEYPOINTS": "synmitsuba.body.hand_points", "face_keypoint_names": "synmitsuba.body.face_points",
+            "FACE68_VERTICES": "synmitsuba.body.face_points"}
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 __all__ = sorted(_EXPORTS)
