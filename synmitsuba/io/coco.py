@@ -8,7 +8,7 @@ uncompressed RLE (column-major runs, starting with background); its area and tig
 [x, y, w, h]; the amodal box in ``bbox_amodal``. ``pycocotools`` reads and evaluates the file.
 COCO-WholeBody's fields come with it: ``lefthand_kpts`` / ``righthand_kpts`` (21 x 3, its order),
 ``face_kpts`` (68 x 3, 300W's order), ``lefthand_box`` / ``righthand_box`` / ``face_box`` (the
-part's points in the image, padded by ``HAND_PAD`` of the larger side, [x, y, w, h]; zeros when
+part's points in the image, padded by ``PART_PAD`` of the larger side, [x, y, w, h]; zeros when
 none) and ``*_valid`` (some point of that part visible). A sample written before a part's labels
 existed gets it unlabelled (v = 0, not valid), so WholeBody loaders still read the file.
 
@@ -25,6 +25,7 @@ import os
 import numpy as np
 
 from synmitsuba.body.anny_model import KEYPOINTS
+from synmitsuba.body.face_points import FACE_POINTS
 from synmitsuba.annotate.keypoints import coco_flags
 from synmitsuba.io.listing import dataset_samples
 from synmitsuba.io.exr import read_sample
@@ -59,8 +60,7 @@ def _keypoints(rec: dict, first: int, count: int, shift: float = 0.0) -> list:
     return out
 
 
-HAND_PAD = 0.1  # a hand's or the face's box: its points' box grown by this share of its larger side on every side
-from synmitsuba.body.face_points import FACE_POINTS  # noqa: E402  (re-exported: tests read it here)
+PART_PAD = 0.1  # a hand's or the face's box: its points' box grown by this share of its larger side on every side
 
 
 def _part(name: str, pts: np.ndarray, classes: np.ndarray, shift: float, width: int, height: int) -> dict:
@@ -74,7 +74,7 @@ def _part(name: str, pts: np.ndarray, classes: np.ndarray, shift: float, width: 
     box = [0.0, 0.0, 0.0, 0.0]
     if len(inside):
         lo, hi = inside.min(0), inside.max(0)
-        pad = HAND_PAD * float((hi - lo).max())
+        pad = PART_PAD * float((hi - lo).max())
         lo, hi = np.maximum(lo - pad, 0), np.minimum(hi + pad, [width, height])
         box = [float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1])]
     return {f"{name}_kpts": kpts, f"{name}_box": box, f"{name}_valid": bool((classes == 1).any())}
