@@ -45,7 +45,7 @@ def _jaw_open(w: float) -> np.ndarray:
 def _hit_points(scene, cam, pixels) -> np.ndarray:
     """(N, 3) where each pixel's ray first meets the scene (skin, an eyeball, a lash; nan: none)."""
     from synmitsuba.engine.raycast import surface_hits
-    d = (cam.R.T @ (np.linalg.inv(cam.K) @ np.c_[pixels, np.ones(len(pixels))].T)).T
+    d = np.c_[pixels, np.ones(len(pixels))] @ cam.ray_matrix.T
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     h = surface_hits(scene, np.broadcast_to(cam.center, d.shape).copy(), d)
     return np.where(np.isfinite(h["t"])[:, None], cam.center + h["t"][:, None] * d, np.nan)

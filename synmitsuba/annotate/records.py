@@ -117,7 +117,7 @@ class Annotator:
             rec = self._record(p, rot, root, cam, scene, instances, amodal, visible, *self._posed[i])
             rec.expression = np.zeros(len(FACE_UNITS)) if face is None else np.asarray(face, np.float64)
             self._hands(rec, p, rot, root, cam, scene, instances, self._posed[i][1])
-            self._face(rec, p, rot, root, face, cam, scene, instances, self._posed[i][1])
+            self._face(rec, p, cam, scene, instances, self._posed[i][1])
             rec.valid = bool(rec.visible_fraction > 0 and rec.visible_fraction >= visible_min
                              and (valid is None or valid[i]))
             rec.layer_pixels = {k: int(m.sum()) for k, m in layer_masks(sample, p.instance).items()}
@@ -175,12 +175,12 @@ class Annotator:
         rec.hands2d, rec.hands_visibility = cam.project(pts.reshape(-1, 3))[0].reshape(2, 21, 2), vis.reshape(2, 21)
 
     @staticmethod
-    def _face(rec: SubjectLabels, p, rot, root, face, cam: Camera, scene, instances, body) -> None:
-        """The face's 68 points (``LayeredHuman.face_keypoints``, skin vertices) and their
-        visibility, tested with 4 mm around each and what lies within 1 cm in front of the skin
-        not counted (brows, lashes and a short beard grow over the points; an annotator marks
-        the brow and the eye through them)."""
-        pts = p.human.face_keypoints(rot, root, face)
+    def _face(rec: SubjectLabels, p, cam: Camera, scene, instances, body) -> None:
+        """The face's 68 points (``LayeredHuman.face_keypoints``: rows of the frame's posed
+        ``body``, which the scene holds) and their visibility, tested with 4 mm around each and
+        what lies within 1 cm in front of the skin not counted (brows, lashes and a short beard
+        grow over the points; an annotator marks the brow and the eye through them)."""
+        pts = body[p.human.face_point_rows]
         vis, _ = keypoint_visibility(scene, cam, pts, body, p.instance, instances, clothing=0.01, radius=0.004)
         rec.face3d_world, rec.face3d_cam = pts, pts @ cam.R.T + cam.t
         rec.face2d, rec.face_visibility = cam.project(pts)[0], vis

@@ -68,11 +68,7 @@ def _anny_targets(body, rotations, roots, faces=None) -> _Targets:
     sk = body.skeleton
     verts, normals, heads, glob = [], [], [], []
     for f, (R, t) in enumerate(zip(rotations, roots)):
-        rest = body.vertices
-        if faces is not None and np.any(faces[f]):
-            units = face_units()
-            rest = rest.copy()
-            rest[units.vertices] += units.displacement(faces[f])
+        rest = face_units().moved(body.vertices, None if faces is None else faces[f])
         v = skin(rest, body.weights, bone_transforms(sk, R, t))
         G, P = forward_kinematics(sk, R, t)
         verts.append(v)
@@ -152,7 +148,7 @@ class _Problem:
         self.w_m = torch.as_tensor(np.array(w_m), dtype=torch.float32)
         self.NM = torch.as_tensor(np.array(nm), dtype=torch.float32)
 
-    def loss(self, verts, joints):  # noqa: D401 (see _run for the priors)
+    def loss(self, verts, joints):
         import torch
         jerr = 100 * (joints[:, self.joint_idx] - self.joint_targets)
         joint_term = self.s.joint_weight * (jerr ** 2).sum(-1).mean()
@@ -171,8 +167,8 @@ def _run(problem: _Problem, betas, pose0, transl0, free: list[int], iterations: 
          warm=None, smooth: bool = False, prior: float = 0.0, expression: bool = False, expr0=None):
     """Adam on (betas), corrections to ``pose0`` at joints ``free`` and to ``transl0`` and, with
     ``expression``, the expression coefficients (from ``expr0`` (F, E), else zeros or the warm
-    start); returns numpy (betas, pose (F, J, 3), transl
-    (F, 3), expression (F, E), last corrections)."""
+    start); returns numpy (betas, pose (F, J, 3), transl (F, 3), expression (F, E), last
+    corrections)."""
     import torch
     s = problem.s
     F = pose0.shape[0]

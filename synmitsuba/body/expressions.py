@@ -51,6 +51,15 @@ class FaceUnits:
         used = np.flatnonzero(w)
         return np.einsum("k,kvc->vc", w[used], self.offsets[used])
 
+    def moved(self, rest: np.ndarray, weights) -> np.ndarray:
+        """``rest`` (anny's vertex order) with the face moved by ``weights``; ``rest`` itself
+        when there are none (None or all zero)."""
+        if weights is None or not np.any(weights):
+            return rest
+        out = rest.copy()
+        out[self.vertices] += self.displacement(weights)
+        return out
+
 
 @functools.lru_cache(maxsize=1)
 def face_units() -> FaceUnits:

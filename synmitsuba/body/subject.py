@@ -430,11 +430,7 @@ class LayeredHuman:
         by ``face``), but the eyes are the pupil centres (each eyeball's front pole, rigid to its
         eye bone)."""
         A, b = T = self._transforms(rotations, root_translation)
-        rest = self.body.vertices
-        if face is not None and np.any(face):
-            units = face_units()
-            rest = rest.copy()
-            rest[units.vertices] += units.displacement(face)
+        rest = face_units().moved(self.body.vertices, face)
         kp = self.body.keypoint_weights @ skin(rest, self.body.weights, T)
         names = list(self.body.keypoint_labels)
         for k, (j, pupil) in enumerate(zip(self.eyes.bones, self.eyes.pupils())):
@@ -452,7 +448,8 @@ class LayeredHuman:
         return self._hand_points.posed(T, self.skeleton.rest_positions, self.body.vertices, self.body.weights)
 
     @functools.cached_property
-    def _face_point_rows(self) -> np.ndarray:
+    def face_point_rows(self) -> np.ndarray:
+        """(68,) the rows of the posed ``body`` layer that are the face keypoints."""
         return face_rows(self.split.source)
 
     def face_keypoints(self, rotations=None, root_translation=None, face=None) -> np.ndarray:
@@ -460,7 +457,7 @@ class LayeredHuman:
         the body's own skin vertices, moved by the ARKit weights ``face`` as the render is."""
         T = self._transforms(rotations, root_translation)
         face = None if face is None or not np.any(face) else np.asarray(face, dtype=np.float64)
-        rows = self._face_point_rows
+        rows = self.face_point_rows
         return skin(self._face_moved(face)[0][rows], self.parts[0].skinning_weights[rows], T)
 
     def gaze(self, rotations=None, root_translation=None) -> np.ndarray:
