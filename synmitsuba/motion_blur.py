@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from synmitsuba.annotate.flow import Geometry, pixel_hits, points_at
-from synmitsuba.rendering.denoise import GUIDE_SPP
+from synmitsuba.rendering.denoise import guide_samples
 from synmitsuba.rendering.passes import render_rgb
 from synmitsuba.seeds import subframe_seed
 
@@ -135,8 +135,8 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
                  render_args: dict, motion: bool = False, before_view=None) -> dict[str, Exposure]:
     """Each view's motion-blurred ``Exposure`` at ``frame`` (subjects posed there): ``min(subframes,
     spp)`` renders across the exposure, each with its share of ``spp`` (the total stays
-    ``spp``), averaged by samples; with ``render_args["denoise"] == "oidn"`` the guides are
-    traced per sub-frame too (``GUIDE_SPP`` shared likewise) so they blur as the colour does.
+    ``spp``), averaged by samples; with ``render_args["denoise"]`` not ``none`` the guides are
+    traced per sub-frame too (``guide_samples(spp)`` shared likewise) so they blur as the colour does.
     Subjects are posed at the exposure's first and last sub-frame and its centre, and move
     linearly between those keys (``_Keys``); moving cameras are blended per sub-frame. The scene
     is left posed at ``frame`` with its previous positions (flow's) as they were. With
@@ -146,8 +146,8 @@ def blurred_rgbs(scene, placed: list, views: list, frame: int, shutter: float, s
     shares = [spp // n + (k < spp % n) for k in range(n)]
     times = subframe_times(frame, shutter, n)
     args = {k: v for k, v in render_args.items() if k in ("max_depth", "rfilter", "sampler")}
-    denoised = render_args.get("denoise", "none") == "oidn"
-    guide_spp = max(1, GUIDE_SPP // n) if denoised else 0
+    denoised = render_args.get("denoise", "none") != "none"
+    guide_spp = max(1, guide_samples(spp) // n) if denoised else 0
     sums = {v.name: _Accumulator() for v in views}
     with scene.keeping_previous():
         keys = _exposure_keys(scene, placed, frame, times) if n > 1 else None

@@ -46,7 +46,7 @@ register_pass("rgb", ("R", "G", "B"), "float32", doc="linear radiance from the p
 register_pass("rgb_clean", ("clean.R", "clean.G", "clean.B"), "float32",
               doc="with photo development only: the rendered linear radiance before it (rgb is the photo)")
 register_pass("rgb_noisy", ("noisy.R", "noisy.G", "noisy.B"), "float32",
-              doc="the path tracer's RGB before denoising (only when rendered with denoise='oidn')")
+              doc="the path tracer's RGB before denoising (only when rendered with a denoiser)")
 register_pass("alpha", ("A",), "float32", doc="fraction of the pixel covered by geometry (stratified sub-pixel rays)")
 register_pass("depth", ("depth.Z",), "float32", doc="z-depth along the optical axis, metres; 0 on background")
 register_pass("mask", ("mask",), "bool", "uint32", doc="1 where the pixel-centre ray hits geometry")

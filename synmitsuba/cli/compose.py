@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 
 from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, positive_int
+from synmitsuba.engine.settings import DENOISERS
 
 
 def run(args) -> int:
@@ -45,7 +46,7 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=natural_int, default=0, help="composition and render seed")
     p.add_argument("--out", required=True, help="output folder (created)")
     p.add_argument("--spp", type=positive_int, default=16, help="samples per pixel of the renders")
-    p.add_argument("--denoise", choices=("none", "oidn"), default="none", help="denoise the renders' RGB with Intel "
+    p.add_argument("--denoise", choices=DENOISERS, default="none", help="denoise the renders' RGB with Intel "
                    "Open Image Denoise (the raw one is kept as rgb_noisy)")
     p.add_argument("--frame", type=natural_int, help="clip frame rendered (default: the middle one)")
     add_variant_option(p)

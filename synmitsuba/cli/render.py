@@ -3,6 +3,7 @@ frame, exactly as ``synmitsuba generate`` renders sequence 0 of a config naming 
 from __future__ import annotations
 
 from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, positive_int, resolution
+from synmitsuba.engine.settings import DENOISERS
 
 
 def scene_config(args, doc):
@@ -56,7 +57,7 @@ def add_parser(sub) -> None:
     add_variant_option(p)
     p.add_argument("--seed", type=natural_int, help="global seed of subjects, motions and rendering (default: the "
                    "file's render.seed)")
-    p.add_argument("--denoise", choices=("none", "oidn"), help="denoise the RGB with Intel Open Image Denoise, "
+    p.add_argument("--denoise", choices=DENOISERS, help="denoise the RGB with Intel Open Image Denoise, "
                    "keeping the raw one as rgb_noisy (default: the file's render.denoise)")
     p.add_argument("--no-labels", action="store_true", help="render only: no subject labels, flow or body "
                    "passes (default: labels written)")

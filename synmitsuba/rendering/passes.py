@@ -19,14 +19,15 @@ from synmitsuba.errors import ConfigError, SynMitsubaWarning
 from synmitsuba.rendering import sensor as sensor_mod
 from synmitsuba.engine.build import build
 from synmitsuba.engine.rays import camera_rays
-from synmitsuba.engine.settings import DENOISERS
+from synmitsuba.engine.settings import DENOISERS, OIDN_QUALITY
 from synmitsuba.engine.settings import choose_sampler
-from synmitsuba.rendering.denoise import guides, oidn
+from synmitsuba.rendering.denoise import guide_samples, guides, oidn
 from synmitsuba.rendering.dome import on_dome
 from synmitsuba.engine.variant import require_variant
 from synmitsuba.sample import PASSES, Sample
 from synmitsuba.scene.camera import Camera
 from synmitsuba.scene.layers import Layer
+from synmitsuba.scene.materials import EnvMap
 from synmitsuba.scene.scene import Scene
 from synmitsuba.schema import POSITIVE, Choice, Number
 
@@ -41,6 +42,11 @@ def _integrator(max_depth: int):
     return _integrators[key]
 
 
+def _lighting(scene: Scene) -> str:
+    """The kind of lighting that picks ``auto``'s sampler (``engine.settings.AUTO_SAMPLERS``)."""
+    return "envmap" if isinstance(scene.environment, EnvMap) else "sky"
+
+
 def render_rgb(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth: int = 6, rfilter: str = "box",
                sampler: str = "auto", guide_spp: int = 0) -> tuple[np.ndarray, tuple | None]:
     """The path-traced RGB alone (H, W, 3 float32 linear), what ``render`` traces, for callers
@@ -48,7 +54,7 @@ def render_rgb(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_d
     guides (albedo, normal) at that many samples per pixel, else None."""
     sensor_mod.register(require_variant())
     built = build(scene)
-    sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, choose_sampler(sampler, spp))
+    sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, choose_sampler(sampler, spp, _lighting(scene)))
     rgb = _trace(built, sensor_dict, spp, seed, max_depth)
     return rgb, (guides(built.mi_scene, sensor_dict, seed, guide_spp) if guide_spp else None)
 
@@ -67,7 +73,8 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     """Render one view of ``scene``: RGB (path tracer, ``spp`` samples per pixel, ``max_depth``
     bounces) and exact depth/normal/position/uv/instance/layer passes. Deterministic in ``seed``.
     ``sampler``: ``auto`` (the best that keeps spp exactly, see ``render.denoise``) or a Mitsuba
-    sampler; ``denoise="oidn"`` denoises ``rgb`` and keeps the raw one as ``rgb_noisy``.
+    sampler; ``denoise="oidn"`` (or ``oidn-balanced``, ``oidn-fast``: OIDN's cheaper qualities)
+    denoises ``rgb`` and keeps the raw one as ``rgb_noisy``.
     ``coverage_samples`` (alpha, per-instance coverage): 9 by measurement on the demo's edge
     pixels against 256 rays, RMS error 0.43 / 0.14 / 0.069 / 0.059 for 1 / 4 / 9 / 16 rays.
     ``rgb``: an RGB traced already (``render_rgb``; motion blur's sub-frame average) to use
@@ -91,7 +98,7 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     t0 = time.perf_counter()
     built = build(scene)
     t1 = time.perf_counter()
-    chosen = choose_sampler(sampler, spp)
+    chosen = choose_sampler(sampler, spp, _lighting(scene))
     sensor_dict = sensor_mod.sensor_dict(camera, spp, rfilter, chosen)
     if rgb is None:
         rgb = _trace(built, sensor_dict, spp, seed, max_depth)
@@ -103,9 +110,10 @@ def render(scene: Scene, camera: Camera, spp: int = 16, seed: int = 0, max_depth
     passes["alpha"], passes["coverage"] = coverage(built, camera, coverage_samples, seed, exact=passes)
     rgb = on_dome(rgb, scene.environment, camera, passes["alpha"], dome_cameras)
     t2 = time.perf_counter()
-    if denoise == "oidn":
-        aux = guides(built.mi_scene, sensor_dict, seed) if denoise_guides is None else denoise_guides
-        extra["rgb_noisy"], rgb = rgb, oidn(rgb, *aux)
+    if denoise != "none":
+        albedo, normal = (guides(built.mi_scene, sensor_dict, seed, guide_samples(spp)) if denoise_guides is None
+                          else denoise_guides)
+        extra["rgb_noisy"], rgb = rgb, oidn(rgb, albedo, normal, quality=OIDN_QUALITY[denoise])
     t3 = time.perf_counter()
     meta = {"spp": spp, "seed": seed, "max_depth": max_depth, "coverage_samples": coverage_samples,
             "variant": variant, "rfilter": rfilter, "sampler": chosen, "denoise": denoise}
