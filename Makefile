@@ -63,7 +63,9 @@ bench: setup
 	$(PY) bench/render_passes.py
 	$(PY) bench/frame_cost.py --frames 30
 	$(PY) bench/frame_cost.py --frames 60 --count 4 --views 4 --no-raw   # memory over a long sequence
-	$(PY) bench/render_quality.py   # PSNR/SSIM per second; make bench-cycles adds Blender Cycles
+	$(PY) bench/render_quality.py   # PSNR/SSIM per second on 3 scenes; make bench-cycles adds Blender Cycles
+	$(PY) bench/samplers.py   # Mitsuba's samplers and pixel filters per kind of scene
+	$(PY) bench/denoise_guides.py   # OIDN's guides and qualities
 	$(PY) bench/motion_retarget.py
 	$(PY) bench/subject_pose.py
 	$(PY) bench/garment_collisions.py --subjects 20 --stride 1 --resolved-only   # the issue-12 figure: ~25 min

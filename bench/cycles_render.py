@@ -5,14 +5,17 @@ a Python that has ``bpy``; never imported by synmitsuba).
 
 SCENE.npz (written by render_quality.py, world y up, metres): per mesh ``<i>_vertices``,
 ``<i>_faces``, ``<i>_uv`` (optional), ``<i>_color``, ``<i>_texture`` (optional, linear float);
-the camera (``cam_to_world`` 4x4 with OpenCV axes, ``fov_y_deg``, ``width``, ``height``); the
-light (``sun_direction`` towards the sun, ``sun_irradiance``) and ``env_radiance``.
-JOBS.json: a list of {"name", "spp", "denoise", "seed"}. Each job writes OUT_DIR/<name>.npy
+the camera (``cam_to_world`` 4x4 with OpenCV axes, ``fov_y_deg``, ``width``, ``height``); an
+optional sun (``sun_direction`` towards it, ``sun_irradiance``); the sky: ``env_radiance`` (constant)
+or ``env_map`` (equirectangular, Mitsuba's layout: u = 0.25 looks along +x, 0.5 along +z, row 0
+up) with ``env_scale``.
+JOBS.json: a list of {"name", "spp", "denoise", "seed", "adaptive" (optional, default true)}; denoise "none", "oidn" (Blender's
+defaults) or "oidn-fast" (OIDN quality FAST, prefilter FAST). Each job writes OUT_DIR/<name>.npy
 (linear RGB, H x W x 3, row 0 at the top) and its seconds to OUT_DIR/times.json: the time of
 ``bpy.ops.render.render`` (scene sync, BVH, path tracing, denoising), the scene built before.
-Blender's defaults are kept (adaptive sampling, Blackman-Harris filter, OIDN with albedo and
-normal passes, prefilter "accurate") except the sample count, the thread count, the bounce
-limit (5, as Mitsuba's max_depth 6) and the seed.
+Blender's defaults are kept (adaptive sampling, Blackman-Harris filter 1.5 px wide, OIDN with albedo
+and normal passes, prefilter "accurate") except the sample count, the thread count, the bounce
+limit (5, as Mitsuba's max_depth 6), the seed, and adaptive sampling off for the reference.
 """
 import json
 import os
@@ -76,20 +79,39 @@ def _camera(data):
     bpy.context.scene.camera = obj
 
 
-def _lights(data):
-    from mathutils import Vector
-    sun = bpy.data.lights.new("sun", "SUN")
-    sun.energy, sun.angle = float(data["sun_irradiance"]), 0.0
-    obj = bpy.data.objects.new("sun", sun)
-    towards = Vector((Y_UP_TO_Z_UP @ data["sun_direction"]).tolist())
-    obj.rotation_euler = towards.to_track_quat("Z", "Y").to_euler()  # the lamp shines along its -Z
-    bpy.context.scene.collection.objects.link(obj)
+def _world(data):
     world = bpy.data.worlds.new("world")
     world.use_nodes = True
-    bg = world.node_tree.nodes["Background"]
-    bg.inputs["Color"].default_value = (*[float(c) for c in data["env_radiance"]], 1.0)
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    bg = nodes["Background"]
     bg.inputs["Strength"].default_value = 1.0
+    if "env_map" in data:
+        # Blender's u = 0.5 looks along its +x (ours +x), 0.75 along its -y (ours +z): Mitsuba's
+        # columns a quarter turn on; its pixel rows run from the bottom
+        px = np.roll(data["env_map"].astype(np.float32), data["env_map"].shape[1] // 4, axis=1)[::-1]
+        h, w = px.shape[:2]
+        img = bpy.data.images.new("env", w, h, float_buffer=True)
+        img.colorspace_settings.name = "Non-Color"
+        img.pixels.foreach_set(np.concatenate([px, np.ones((h, w, 1), np.float32)], -1).ravel())
+        tex = nodes.new("ShaderNodeTexEnvironment")
+        tex.image, tex.interpolation = img, "Linear"
+        links.new(tex.outputs["Color"], bg.inputs["Color"])
+        bg.inputs["Strength"].default_value = float(data["env_scale"])
+    else:
+        bg.inputs["Color"].default_value = (*[float(c) for c in data["env_radiance"]], 1.0)
     bpy.context.scene.world = world
+
+
+def _lights(data):
+    from mathutils import Vector
+    if "sun_direction" in data:
+        sun = bpy.data.lights.new("sun", "SUN")
+        sun.energy, sun.angle = float(data["sun_irradiance"]), 0.0
+        obj = bpy.data.objects.new("sun", sun)
+        towards = Vector((Y_UP_TO_Z_UP @ data["sun_direction"]).tolist())
+        obj.rotation_euler = towards.to_track_quat("Z", "Y").to_euler()  # the lamp shines along its -Z
+        bpy.context.scene.collection.objects.link(obj)
+    _world(data)
 
 
 def build(path: str) -> None:
@@ -115,9 +137,13 @@ def build(path: str) -> None:
 def render(job: dict, out: str) -> float:
     s = bpy.context.scene
     s.cycles.samples, s.cycles.seed = int(job["spp"]), int(job["seed"])
-    s.cycles.use_denoising = job["denoise"] == "oidn"
+    s.cycles.use_adaptive_sampling = job.get("adaptive", True)  # off for the reference: every pixel converged
+    s.cycles.use_denoising = job["denoise"] != "none"
     if s.cycles.use_denoising:
         s.cycles.denoiser = "OPENIMAGEDENOISE"
+        fast = job["denoise"] == "oidn-fast"
+        s.cycles.denoising_quality = "FAST" if fast else "HIGH"
+        s.cycles.denoising_prefilter = "FAST" if fast else "ACCURATE"
     path = os.path.join(out, job["name"] + ".exr")
     s.render.filepath = path
     t = time.perf_counter()

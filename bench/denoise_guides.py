@@ -1,10 +1,12 @@
-"""Denoising guide variants for OIDN (issue 39): PSNR against a 2048-spp reference and seconds,
-on a sky-only diffuse scene and render_quality.py's sun + sky scene with two subjects.
+"""Denoising guide variants for OIDN at its three qualities (issue 39): PSNR against a 2048-spp
+reference and seconds, on render_quality.py's three scenes.
 
 - aov16 / aov4: Mitsuba's aov integrator (albedo, shading normal) through our sensor at 16 / 4
-  spp (what sm.render uses: 16);
-- first_hit1 / 4 / 9: primary rays only (1 = the pixel centre, as the exact passes; 4 / 9
-  stratified jittered), the hit BSDF's diffuse reflectance and normal averaged per pixel.
+  spp (what sm.render uses: 16), passed as clean guides;
+- aov1_noisy: the same at 1 spp, passed as noisy (OIDN filters them with the colour, as Cycles'
+  "fast" prefilter does);
+- first_hit1 / 9: primary rays only (1 = the pixel centre, as the exact passes; 9 stratified
+  jittered), the hit BSDF's diffuse reflectance and normal averaged per pixel.
 
     python bench/denoise_guides.py [RES]
 """
@@ -13,8 +15,6 @@ import sys
 import time
 
 import numpy as np
-import trimesh
-
 import synmitsuba as sm
 
 
@@ -36,71 +36,60 @@ def first_hit_guides(mi_scene, camera, per_pixel, seed):
     return mean(albedo), mean(normal)
 
 
-def sky_scene(res):
-    """A ground, a box and a sphere under a uniform sky (the issue's sky-only kind)."""
-    scene = sm.Scene()
-    quad = np.array([[-30, 0, -30], [30, 0, -30], [30, 0, 30], [-30, 0, 30]], float)
-    scene.add_mesh("ground", quad, np.array([[0, 2, 1], [0, 3, 2]]), material=sm.Material(base_color=0.5))
-    box = trimesh.creation.box((0.8, 0.8, 0.8))
-    box.apply_translation((-0.6, 0.4, 0))
-    scene.add_mesh("box", box.vertices, box.faces, material=sm.Material(base_color=(0.7, 0.3, 0.2)))
-    ball = trimesh.creation.icosphere(5, 0.5)
-    ball.apply_translation((0.6, 0.5, 0.2))
-    scene.add_mesh("sphere", ball.vertices, ball.faces, material=sm.Material(base_color=(0.2, 0.4, 0.7)))
-    scene.set_environment(sm.Constant(1.0))
-    return scene, sm.Camera.look_at((0.3, 1.6, 3.2), (0, 0.4, 0), fov_y_deg=40, width=res, height=res)
-
-
-def subjects_scene(res):
-    from render_quality import build_scene
-    return build_scene(res, None)
-
-
 def variants():
+    """name -> (guides(built, camera, sensor_dict, seed), clean): ``clean`` guides go to OIDN as
+    noise-free (cleanAux); the others it filters with the colour (Cycles' "fast" prefilter)."""
     from synmitsuba.rendering.denoise import guides
-    out = {f"aov{n}": (lambda built, cam, sd, seed, n=n: guides(built.mi_scene, sd, seed, n)) for n in (16, 4)}
-    out.update({f"first_hit{n}": (lambda built, cam, sd, seed, n=n: first_hit_guides(built.mi_scene, cam, n, seed))
-                for n in (1, 4, 9)})
+    out = {f"aov{n}": ((lambda built, cam, sd, seed, n=n: guides(built.mi_scene, sd, seed, n)), True) for n in (16, 4)}
+    out["aov1_noisy"] = ((lambda built, cam, sd, seed: guides(built.mi_scene, sd, seed, 1)), False)
+    out.update({f"first_hit{n}": ((lambda built, cam, sd, seed, n=n: first_hit_guides(built.mi_scene, cam, n, seed)),
+                                  True) for n in (1, 9)})
     return out
 
 
-def measure(scene, cam) -> dict:
+def measure(scene, cam, qualities) -> dict:
     import mitsuba as mi
+    import pyoidn
 
     from synmitsuba.engine.build import build
     from synmitsuba.io.preview import to_srgb8
     from synmitsuba.metrics import psnr
     from synmitsuba.rendering import sensor as sensor_mod
-    from synmitsuba.rendering.denoise import oidn
     from synmitsuba.rendering.passes import render_rgb
 
     def srgb(x):
         return to_srgb8(x).astype(np.float64) / 255
+
+    def denoise(noisy, a, n, quality, clean):
+        return np.maximum(pyoidn.denoise(np.ascontiguousarray(noisy, np.float32), a, np.clip(n, -1, 1), hdr=True,
+                                         clean_aux=clean, quality=quality), 0)
     sensor_mod.register(mi.variant())
     built = build(scene)
-    ref = render_rgb(scene, cam, 2048, 99)[0]
+    ref = np.mean([render_rgb(scene, cam, 256, 99 + k)[0] for k in range(8)], 0)
     sd = sensor_mod.sensor_dict(cam, 4)
     row: dict = {}
-    for spp in (4, 16):
+    for spp in (1, 4, 16):
         noisy = render_rgb(scene, cam, spp, 5)[0]
         row[f"raw@{spp}"] = round(psnr(srgb(noisy), srgb(ref)), 2)
-        for name, fn in variants().items():
+        for name, (fn, clean) in variants().items():
             fn(built, cam, sd, 1)  # compiled once before timing
             t = time.perf_counter()
             a, n = fn(built, cam, sd, 1)
             tg = time.perf_counter() - t
-            oidn(noisy, a, n)
-            t = time.perf_counter()
-            den = oidn(noisy, a, n)
-            row[f"{name}@{spp}"] = {"psnr": round(psnr(srgb(den), srgb(ref)), 2), "guide_s": round(tg, 3),
-                                    "oidn_s": round(time.perf_counter() - t, 3)}
+            for q in qualities:
+                denoise(noisy, a, n, q, clean)
+                t = time.perf_counter()
+                den = denoise(noisy, a, n, q, clean)
+                row[f"{name}/{q}@{spp}"] = {"psnr": round(psnr(srgb(den), srgb(ref)), 2), "guide_s": round(tg, 3),
+                                            "oidn_s": round(time.perf_counter() - t, 3)}
     return row
 
 
 def main() -> dict:
+    from render_quality import SCENES, build_scene
     res = int(sys.argv[1]) if len(sys.argv) > 1 else 256
     sm.set_variant()
-    out = {name: measure(*make(res)) for name, make in (("sky_only", sky_scene), ("sun_sky_subjects", subjects_scene))}
+    out = {kind: measure(*build_scene(res, None, kind), ("high", "balanced", "fast")) for kind in SCENES}
     print(json.dumps(out, indent=1))
     return out
 
