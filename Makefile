@@ -90,6 +90,7 @@ bench: setup
 	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
 	$(PY) -m pip install -q 'newton==1.8.0'   # cloth solvers on Warp (issue 34; not a dependency yet)
 	$(PY) bench/cloth_newton.py --frames 30 --figure out/bench/cloth_skirt.png
+	$(PY) bench/cloth_newton.py --frames 30 --motion walk --solvers vbd --figure out/bench/cloth_skirt_walk.png
 
 clean:
 	rm -rf out .pytest_cache
