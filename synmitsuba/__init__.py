@@ -29,6 +29,8 @@ _FROM = {
                           "MotionLibrary", "random_window", "is_allowed", "load_motion", "HandTrack", "HandKey",
                           "sample_hands", "with_hands", "HAND_BEHAVIOURS", "FaceTrack", "FaceKey", "sample_face",
                           "with_face", "EXPRESSIONS"),
+    "synmitsuba.cloth": ("simulate_cloth", "drape", "ClothSettings", "ClothTrack", "ClothError", "ClothPiece",
+                         "Collider", "FABRICS", "CLOTH_KINDS"),
     "synmitsuba.compose": ("load_scene_file", "SceneFile", "scene_spec", "add_subjects", "SubjectEntry",
                            "compose_scene", "ComposeConfig", "SceneSpec", "load_environment", "environment_names"),
     "synmitsuba.seeds": ("sequence_rng", "render_seed"),

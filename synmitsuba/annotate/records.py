@@ -89,7 +89,7 @@ class Annotator:
         for p in self.subjects:
             rot, root = p.motion.frame(frame % p.motion.n_frames)
             face = p.motion.face_at(frame % p.motion.n_frames)
-            layers = p.human.pose(rot, root, face=face)  # the arrays pose_in put in the scene (posing is cached)
+            layers = p.layers(frame)  # the arrays pose_in put in the scene (posing is cached)
             body = next(layer.vertices for layer in layers if layer.name == "body")
             self._posed.append((p.human.keypoints(rot, root, face), body, _joints(p.human.skeleton, rot, root)))
             self._points.append(np.concatenate([layer.points.reshape(-1, 3) if layer.is_curves else layer.vertices

@@ -22,6 +22,9 @@ RECIPE_VERSION = 1
 # SMPL-X body is synmitsuba.body.smplx_model.smplx_body).
 MODELS = ("anny",)
 TEXTURE_SIZES = (64, 128, 256, 512, 1024)
+# How garments move: skinned with the body (fast), or the hanging ones (skirts, dresses)
+# simulated over each clip by the cloth stage (synmitsuba.cloth).
+CLOTH_MODES = ("skinned", "simulated")
 
 
 @dataclass
@@ -38,6 +41,8 @@ class SubjectRecipe(Params):
     brows: BrowParams = spec(factory=BrowParams, check=Nested(BrowParams), doc="eyebrows and eyelashes")
     texture_size: int = spec(1024, Choice(TEXTURE_SIZES), doc="garment texture side (the skin's is twice, at most "
                              "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
+    cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts and dresses hang and swing, "
+                      "simulated over each clip (synmitsuba.cloth)")
 
     def __post_init__(self):
         kinds = [g.kind for g in self.garments]
@@ -84,6 +89,8 @@ class SubjectConfig(Params):
                              "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
     age_years: list = spec(factory=lambda: list(ADULT_YEARS), check=Range(0.0, 90.0, "years"),
                            doc="ages drawn from (adults by default; below 18 anny's calibration shapes children)")
+    cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts and dresses hang and swing, "
+                      "simulated over each clip (synmitsuba.cloth)")
 
 
 def anny_age(years: float) -> float:
@@ -188,5 +195,5 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     brows = sample_brows(rng, pheno["gender"] >= 0.5)
     skin.under_eye, skin.pores = round(float(rng.uniform(0.0, 0.8)), 3), round(float(rng.uniform(0.3, 1.0)), 3)
     recipe = SubjectRecipe(phenotypes=pheno, skin=skin, garments=garments, hair=hair, accessories=accessories,
-                           eyes=eyes, brows=brows, texture_size=cfg.texture_size)
+                           eyes=eyes, brows=brows, texture_size=cfg.texture_size, cloth=cfg.cloth)
     return SubjectRecipe.from_dict(json.loads(recipe.to_json()))  # normalised exactly as it will be read back

@@ -289,20 +289,27 @@ class LayeredHuman:
                 raise ConfigError("rotations", f"array{rotations.shape}", f"expected ({len(self.skeleton)}, 3, 3)")
         return bone_transforms(self.skeleton, rotations, root_translation)
 
-    def pose(self, rotations=None, root_translation=None, resolve: bool = True, face=None) -> list[PosedLayer]:
+    def pose(self, rotations=None, root_translation=None, resolve: bool = True, face=None,
+             garments: dict | None = None) -> list[PosedLayer]:
         """Posed layers for local ``rotations`` (J, 3, 3) and ``root_translation`` (3,), the face
         moved by the ARKit unit weights ``face`` (52,) first (``body.expressions``); with
         ``resolve`` garments are pushed out of the posed body and of the garments under them
-        (``body.collide``)."""
+        (``body.collide``). ``garments``: vertices by garment name that replace the skinned
+        ones (the cloth stage's simulated cloth; not pushed, but garments over them are)."""
         T = self._transforms(rotations, root_translation)
         face = None if face is None or not np.any(face) else np.asarray(face, dtype=np.float64)
-        key = (T[0].tobytes(), T[1].tobytes(), resolve, None if face is None else face.tobytes())
+        garments = garments or {}
+        key = (T[0].tobytes(), T[1].tobytes(), resolve, None if face is None else face.tobytes(),
+               tuple((k, np.asarray(v).tobytes()) for k, v in sorted(garments.items())))
         if key in self._posed:  # same arrays, new records: nothing downstream writes into them
             return [dataclasses.replace(layer) for layer in self._posed[key]]
         moved = self._face_moved(face)
         out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest if k else moved[0], p.skinning_weights, T), p.faces,
                           p.uv) for k, p in enumerate(self.parts)]
-        surface = self._resolve(out) if resolve else None
+        for layer in out:
+            if layer.name in garments:
+                layer.vertices = np.asarray(garments[layer.name], dtype=np.float64)
+        surface = self._resolve(out, simulated=set(garments)) if resolve else None
         if len(self.hair):
             hair = dataclasses.replace(self.hair, points=self._pose_strands(T, surface, moved[2]))
             scalp = hair.region < 5
@@ -411,16 +418,18 @@ class LayeredHuman:
         seg = np.diff(self.hair.points[self.hair.region < 5], axis=1)
         return np.sqrt(np.einsum("nki,nki->nk", seg, seg))
 
-    def _resolve(self, layers: list[PosedLayer], calibrate: bool = False) -> Surface:
-        """Garments (inner first) out of the posed body, then out of the garments under them;
-        returns the posed body's surface."""
+    def _resolve(self, layers: list[PosedLayer], calibrate: bool = False, simulated: frozenset | set = frozenset()) -> Surface:
+        """Garments (inner first) out of the posed body, then out of the garments under them,
+        but for the ``simulated`` ones (their solver kept them out); returns the posed body's
+        surface."""
         body = np.empty_like(self.body.vertices)
         body[self.split.source] = layers[0].vertices
         surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), list[Surface]()
         for part, layer in zip(self.parts, layers):
             if part.collider is None:
                 continue
-            layer.vertices = part.collider.resolve(layer.vertices, surface, inner, calibrate)
+            if part.name not in simulated:
+                layer.vertices = part.collider.resolve(layer.vertices, surface, inner, calibrate)
             if part.inner:
                 inner.append(Surface.of(layer.vertices, layer.faces, part.collider.incidence))
         return surface
@@ -466,10 +475,11 @@ class LayeredHuman:
         return np.stack([A[j][:, 2] for j in self.eyes.bones])
 
     def add_to(self, scene, rotations=None, root_translation=None, instance: int = 1, prefix: str | None = None,
-               face=None):
-        """Add (or, when already there, move) every layer in ``scene`` as ``<prefix>_<layer>``."""
+               face=None, garments: dict | None = None):
+        """Add (or, when already there, move) every layer in ``scene`` as ``<prefix>_<layer>``;
+        ``garments`` as ``pose`` takes them."""
         prefix = prefix or f"subject{instance}"
-        for layer in self.pose(rotations, root_translation, face=face):
+        for layer in self.pose(rotations, root_translation, face=face, garments=garments):
             name = f"{prefix}_{layer.name}"
             if layer.is_curves:
                 if name in scene.curves:

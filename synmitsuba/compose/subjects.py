@@ -14,7 +14,8 @@ import numpy as np
 from synmitsuba.body.expressions import FACE_UNITS
 from synmitsuba.body.eyes import GazeTarget, aim_eyes, eye_look_weights
 from synmitsuba.body.recipe import SubjectConfig, SubjectRecipe, sample_subject
-from synmitsuba.body.subject import LayeredHuman, build_subject
+from synmitsuba.body.subject import LayeredHuman, PosedLayer, build_subject
+from synmitsuba.cloth.simulate import ClothTrack, simulate_cloth
 from synmitsuba.compose.instances import first_subject_instance, scene_instances
 from synmitsuba.compose.placement import envelope, frame_boxes, frame_hulls
 from synmitsuba.errors import ConfigError
@@ -130,18 +131,28 @@ class PlacedSubject:
     instance: int
     prefix: str
     fits: dict = field(default_factory=dict)  # body-model fits by kind ("smplx", "smpl"): annotate.smplx_fit
+    cloth: ClothTrack | None = None  # the simulated garments over the clip (recipe cloth: simulated)
+
+    def garments_at(self, time: float) -> dict | None:
+        """The simulated garments' vertices at (fractional) clip frame ``time``; None when skinned."""
+        return None if self.cloth is None else self.cloth.at(time)
+
+    def layers(self, frame: int) -> list[PosedLayer]:
+        """The posed layers at clip frame ``frame`` (wrapping round), as ``pose_in`` puts them in a scene."""
+        f = int(frame) % self.motion.n_frames
+        return self.human.pose(*self.motion.frame(f), face=self.motion.face_at(f), garments=self.garments_at(f))
 
     def pose_in(self, scene, frame: int | None = None) -> None:
         """Pose the subject at ``frame`` (default its own) in ``scene``, moving it in place."""
         f = self.frame if frame is None else int(frame) % self.motion.n_frames
         self.human.add_to(scene, *self.motion.frame(f), instance=self.instance, prefix=self.prefix,
-                          face=self.motion.face_at(f))
+                          face=self.motion.face_at(f), garments=self.garments_at(f))
 
     def pose_at(self, scene, time: float) -> None:
         """Pose the subject at fractional frame ``time`` (a motion-blur sub-frame; clamped to
         the clip), moving it in place."""
         self.human.add_to(scene, *self.motion.at(time), instance=self.instance, prefix=self.prefix,
-                          face=self.motion.face_at(time))
+                          face=self.motion.face_at(time), garments=self.garments_at(time))
 
 
 def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) -> Motion:
@@ -166,7 +177,9 @@ def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) ->
     motion = place_motion(clip, s.position, s.yaw_deg, s.lift)
     if s.motion.start:
         motion = motion.rolled(s.motion.start)
-    return PlacedSubject(human, aimed(motion, s.gaze), 0, s.instance, f"subject{i}")
+    motion = aimed(motion, s.gaze)
+    cloth = simulate_cloth(human, motion) if human.recipe.cloth == "simulated" else None
+    return PlacedSubject(human, motion, 0, s.instance, f"subject{i}", cloth=cloth)
 
 
 def draw_hands(rng: np.random.Generator, motion: Motion) -> HandTrack:

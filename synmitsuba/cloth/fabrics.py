@@ -1,0 +1,30 @@
+"""Fabric parameters per kind of cloth, as Newton's VBD cloth model reads them: areal density,
+membrane stiffness against stretch and against change of area (shear), damping, bending
+stiffness, friction against the body. The values were tuned by eye on our 1-3 cm
+garment triangles at 10 substeps (softer membranes crumple like paper, see issue 34's note):
+their order between fabrics is what matters (denim and leather stiffer and heavier than
+jersey), not real moduli."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Fabric:
+    density: float       # kg per square metre
+    stretch: float       # Newton's tri_ke
+    shear: float         # Newton's tri_ka
+    damping: float       # Newton's tri_kd
+    bend: float          # Newton's edge_ke: how much a fold costs
+    bend_damping: float  # Newton's edge_kd
+    friction: float      # against the body and the ground
+
+
+# One entry per fabric: a garment kind (``cloth.kinds``) names one.
+FABRICS: dict[str, Fabric] = {
+    "jersey": Fabric(0.16, 6.0e3, 6.0e3, 1.0e-2, 5.0e-2, 1.0e-3, 0.5),   # knit t-shirt cotton: soft, clingy
+    "woven": Fabric(0.12, 1.0e4, 1.0e4, 1.0e-2, 1.0e-1, 1.0e-3, 0.4),    # shirting, light skirts: crisp, light
+    "knit": Fabric(0.30, 5.0e3, 5.0e3, 1.5e-2, 8.0e-2, 2.0e-3, 0.6),     # sweaters: heavy and stretchy
+    "denim": Fabric(0.40, 2.0e4, 2.0e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.5),    # twill, chinos: stiff, heavy
+    "leather": Fabric(0.60, 3.0e4, 3.0e4, 2.0e-2, 6.0e-1, 1.0e-2, 0.6),  # holds its shape
+}

@@ -1,0 +1,40 @@
+"""Which garment kinds the cloth stage simulates, of what fabric, and which of their vertices
+it holds to the skinned garment (a waistband, a bodice): those move with the body, the rest
+hangs from them. A garment kind not listed here stays skinned even under ``cloth: simulated``
+(tops and trousers follow the body closely; see issue 34's note)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from synmitsuba.body.garments import BodyRegions
+
+
+@dataclass(frozen=True)
+class ClothKind:
+    fabric: str                # a name in ``fabrics.FABRICS``
+    held: Callable[[np.ndarray, BodyRegions], np.ndarray]  # (rest vertices, body regions) -> (V,) bool
+
+
+def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
+    """Hold what lies above a body landmark's height (``waist_y``, ``hip_y``, as the garment
+    builder cut at) less ``band`` metres."""
+    def held(rest: np.ndarray, regions: BodyRegions) -> np.ndarray:
+        return rest[:, 1] >= getattr(regions, landmark) - band
+    return held
+
+
+def top(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
+    """Hold the garment's top ``band`` metres (a skirt's waistband)."""
+    def held(rest: np.ndarray, regions: BodyRegions) -> np.ndarray:
+        return rest[:, 1] >= rest[:, 1].max() - band
+    return held
+
+
+# One entry per simulated garment kind (a name in body.garments.GARMENTS).
+CLOTH_KINDS: dict[str, ClothKind] = {
+    "skirt": ClothKind("woven", top(0.02)),  # hangs from its waistband
+    "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
+}

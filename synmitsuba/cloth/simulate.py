@@ -1,0 +1,235 @@
+"""``simulate_cloth(human, motion) -> ClothTrack``: a subject's hanging garments (``CLOTH_KINDS``)
+simulated over its clip with Newton's VBD cloth solver on the CPU (deterministic: Warp's CPU
+kernels run in order), against the posed body as a moving mesh collider and the ground.
+
+Each garment's uv seams are welded (else its panels fall apart); its held vertices (a
+waistband, a bodice) are not simulated but moved to the skinned garment's place at every
+substep, and the rest hangs from them. The cloth first hangs at the clip's first pose for
+``settle_s`` (from the skinned garment: gravity takes out its shell's stiffness), then follows
+the clip frame by frame, the body and the held vertices moved linearly between frames over
+the substeps. Newton's full-surface contacts (the body's edges and faces against the cloth's,
+not only its vertices) keep a leg from passing between the cloth's vertices."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from synmitsuba.body.topology import weld
+from synmitsuba.cloth.fabrics import FABRICS, Fabric
+from synmitsuba.cloth.kinds import CLOTH_KINDS
+from synmitsuba.errors import SynMitsubaError
+
+
+class ClothError(SynMitsubaError, RuntimeError):
+    """A garment's simulation diverged: the sequence must not be written with that cloth."""
+
+    def __init__(self, garment: str, frame: int, what: str):
+        self.garment, self.frame = garment, frame
+        super().__init__(f"cloth simulation of the {garment} diverged at clip frame {frame} ({what}); nothing was "
+                         "written for it: try more substeps (ClothSettings.substeps) or cloth: skinned")
+
+
+@dataclass(frozen=True)
+class ClothSettings:
+    substeps: int = 10       # solver steps per clip frame
+    iterations: int = 5      # VBD iterations per step
+    settle_s: float = 0.5    # seconds the cloth hangs at the first pose before the clip starts
+    contact_gap: float = 0.01     # metres within which body contacts are made
+    particle_radius: float = 0.004  # metres the cloth keeps off the body
+    contact_stiffness: float = 1.0e4  # against the body: 1e3 let a taut cloth 3 mm into a sphere
+    full_contact: bool = True     # the body's edges and faces too, not only its vertices
+    max_drift: float = 1.0        # metres a vertex may stray from the skinned garment before it counts as diverged
+
+
+@dataclass
+class ClothTrack:
+    """Simulated garment vertices per clip frame, each (F, V, 3) in its layer's vertex order
+    (``PosedLayer.vertices`` of the garment named by the key)."""
+
+    frames: dict
+
+    @property
+    def n_frames(self) -> int:
+        return len(next(iter(self.frames.values())))
+
+    def at(self, time: float) -> dict:
+        """Each garment's vertices at fractional clip frame ``time`` (clamped; linear between
+        frames, a whole ``time`` is that frame exactly)."""
+        t = float(np.clip(time, 0, self.n_frames - 1))
+        i = min(int(np.floor(t)), self.n_frames - 1)
+        if t == i:
+            return {k: v[i] for k, v in self.frames.items()}
+        a = t - i
+        return {k: (1 - a) * v[i] + a * v[i + 1] for k, v in self.frames.items()}
+
+
+@dataclass
+class ClothPiece:
+    """One piece of cloth as particles: its triangles, the particles held (moved, not
+    simulated) and its fabric."""
+
+    faces: np.ndarray  # (T, 3) particle indices
+    held: np.ndarray   # (P,) bool
+    fabric: Fabric
+
+
+@dataclass
+class Collider:
+    """A mesh that the cloth cannot pass, possibly moving: ``at(frame) -> (collider vertices,
+    every piece's particles concatenated)`` gives the collider and where the held particles
+    are (the others' entries are ignored but the first frame's, which start the cloth)."""
+
+    faces: np.ndarray
+    at: Callable[[int], tuple[np.ndarray, np.ndarray]]
+    fps: float
+    n_frames: int
+
+
+@dataclass
+class _Garment:
+    """A subject's simulated garment: ``rows`` the layer vertex each particle is (the first of
+    its weld group), ``index`` the particle of each layer vertex."""
+
+    name: str
+    part: int
+    rows: np.ndarray
+    index: np.ndarray
+    piece: ClothPiece
+
+
+def simulated_garments(human) -> list[_Garment]:
+    """The subject's garments that the cloth stage simulates, as particles."""
+    out = []
+    for k, part in enumerate(human.parts):
+        kind = CLOTH_KINDS.get(part.name)
+        if kind is None:
+            continue
+        rep = weld(part.rest)
+        rows, index = np.unique(rep, return_inverse=True)
+        index = index.reshape(-1)
+        held = kind.held(part.rest[rows], human.regions)
+        out.append(_Garment(part.name, k, rows, index, ClothPiece(index[part.faces], held, FABRICS[kind.fabric])))
+    return out
+
+
+def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> ClothTrack | None:
+    """The subject's simulated garments over every frame of ``motion`` (placed, as rendered);
+    None when it wears none that the cloth stage simulates. Raises ``ClothError`` naming the
+    garment and frame where a simulation goes non-finite or strays ``max_drift`` from the
+    skinned garment."""
+    garments = simulated_garments(human)
+    if not garments:
+        return None
+
+    def at(frame: int) -> tuple[np.ndarray, np.ndarray]:  # (closed body, skinned garments' particles)
+        layers = human.pose(*motion.frame(frame), face=motion.face_at(frame))
+        body = np.empty_like(human.body.vertices)
+        body[human.split.source] = layers[0].vertices
+        return body, np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
+
+    q = drape([g.piece for g in garments], Collider(human.body.faces, at, motion.fps, motion.n_frames), settings,
+              names=[g.name for g in garments])
+    frames, start = {}, 0
+    for g in garments:
+        frames[g.name] = q[:, start:start + len(g.rows)][:, g.index]
+        start += len(g.rows)
+    return ClothTrack(frames)
+
+
+def drape(pieces: list[ClothPiece], collider: Collider, settings: ClothSettings | None = None,
+          names: list[str] | None = None) -> np.ndarray:
+    """(F, P, 3) particle positions per frame of cloth ``pieces`` (their particles concatenated)
+    over the moving ``collider`` and the ground at y = 0: ``settle_s`` at the first frame, then
+    each frame in ``substeps``, the collider and the held particles moved linearly between
+    frames. ``names`` name the pieces in a ``ClothError``."""
+    import warp as wp
+    s = settings or ClothSettings()
+    names = names or [f"piece {k}" for k in range(len(pieces))]
+    with wp.ScopedDevice("cpu"):
+        return _run(pieces, collider, s, names)
+
+
+def _model(pieces: list[ClothPiece], faces: np.ndarray, collider_v: np.ndarray, q: np.ndarray, s: ClothSettings):
+    """Newton's model: the ground, the collider mesh (returned to move it), each piece as cloth
+    of its fabric, its held particles inactive (moved, not simulated)."""
+    import newton
+    import warp as wp
+    builder = newton.ModelBuilder(up_axis=newton.Axis.Y)  # gravity along -y
+    builder.add_ground_plane()
+    mesh = newton.Mesh(collider_v.astype(np.float32), faces.astype(np.int32).ravel())
+    builder.add_shape_mesh(body=-1, mesh=mesh)
+    start = 0
+    for p in pieces:
+        f, pts = p.fabric, q[start:start + len(p.held)].astype(np.float32)
+        builder.add_cloth_mesh(pos=wp.vec3(0, 0, 0), rot=wp.quat_identity(), scale=1.0,  # type: ignore[arg-type]
+                               vel=wp.vec3(0, 0, 0), vertices=[wp.vec3(*v) for v in pts],
+                               indices=p.faces.astype(np.int32).ravel().tolist(), density=f.density, tri_ke=f.stretch,
+                               tri_ka=f.shear, tri_kd=f.damping, edge_ke=f.bend, edge_kd=f.bend_damping,
+                               particle_radius=s.particle_radius)
+        start += len(p.held)
+    builder.color(include_bending=True)
+    model = builder.finalize()
+    held = np.concatenate([p.held for p in pieces])
+    old = model.particle_flags
+    assert old is not None  # a model with particles has their flags
+    flags = old.numpy()
+    flags[held] &= ~newton.ParticleFlags.ACTIVE
+    model.particle_flags = wp.array(flags, dtype=old.dtype)
+    model.soft_contact_ke, model.soft_contact_kd = s.contact_stiffness, 1.0e-2
+    model.soft_contact_mu = float(np.mean([p.fabric.friction for p in pieces]))
+    return model, mesh, held
+
+
+def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: list[str]) -> np.ndarray:
+    import newton
+    body0, q0 = collider.at(0)
+    model, mesh, held = _model(pieces, collider.faces, body0, q0, s)
+    solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations)
+    s0, s1, control = model.state(), model.state(), model.control()
+    pipeline = newton.CollisionPipeline(model, soft_contact_gap=s.contact_gap,
+                                        enable_rigid_soft_full_surface_contact=s.full_contact)
+    contacts = pipeline.contacts()
+    dt = 1.0 / collider.fps / s.substeps
+    out = np.empty((collider.n_frames, len(q0), 3))
+    prev = (body0, q0)
+    for f in range(-int(round(s.settle_s * collider.fps)), collider.n_frames):
+        now = collider.at(f) if f > 0 else (body0, q0)
+        for k in range(s.substeps):
+            w = (k + 1) / s.substeps
+            if f > 0:
+                _move(mesh, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
+                q = s0.particle_q.numpy()
+                q[held] = (prev[1] + w * (now[1] - prev[1]))[held]
+                s0.particle_q.assign(q)
+            pipeline.collide(s0, contacts)
+            s0.clear_forces()
+            solver.step(s0, s1, control, contacts, dt)
+            s0, s1 = s1, s0
+        if f >= 0:
+            out[f] = s0.particle_q.numpy()
+            _check(out[f], now[1], pieces, names, f, s.max_drift)
+        prev = now
+    return out
+
+
+def _move(mesh, vertices: np.ndarray, velocities: np.ndarray) -> None:
+    mesh.mesh.points.assign(vertices.astype(np.float32))
+    mesh.mesh.velocities.assign(velocities.astype(np.float32))
+    mesh.mesh.refit()
+
+
+def _check(q: np.ndarray, start_q: np.ndarray, pieces: list[ClothPiece], names: list[str], frame: int,
+           max_drift: float) -> None:
+    """Raise ``ClothError`` for the first piece with a non-finite particle or one farther than
+    ``max_drift`` from where ``at`` puts it (the skinned garment)."""
+    start = 0
+    for p, name in zip(pieces, names):
+        part = slice(start, start + len(p.held))
+        start += len(p.held)
+        if not np.isfinite(q[part]).all():
+            raise ClothError(name, frame, "non-finite vertices")
+        drift = float(np.linalg.norm(q[part] - start_q[part], axis=1).max())
+        if drift > max_drift:
+            raise ClothError(name, frame, f"a vertex {drift:.2f} m from the skinned garment")

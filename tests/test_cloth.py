@@ -1,0 +1,176 @@
+"""The cloth stage (synmitsuba.cloth): a square cloth dropped on a sphere against free fall and
+the sphere's surface; a simulated skirt over a walk against the body (winding numbers,
+tests/reference.py); determinism across processes; the placed subject's scene and labels
+carrying the simulated cloth, and the skinned path as before."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import trimesh
+from reference import point_triangle_distances, winding_numbers
+from scipy.spatial import cKDTree
+
+from synmitsuba.cloth import FABRICS, ClothError, ClothPiece, ClothSettings, Collider, drape, simulate_cloth
+
+G = 9.81
+CENTRE, R = np.array([0.0, 0.5, 0.0]), 0.3
+
+
+def _square(n: int = 33, side: float = 0.8, y: float = 0.85):
+    """An n x n grid of particles ``side`` metres wide at height ``y``, and its triangles."""
+    u = np.linspace(-side / 2, side / 2, n)
+    x, z = np.meshgrid(u, u, indexing="ij")
+    q = np.stack([x.ravel(), np.full(n * n, y), z.ravel()], 1)
+    k = np.arange(n * n).reshape(n, n)
+    a, b, c, d = k[:-1, :-1].ravel(), k[1:, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, 1:].ravel()
+    return q, np.concatenate([np.stack([a, c, b], 1), np.stack([b, c, d], 1)])
+
+
+N = 17  # particles along the square's side
+
+
+def _sphere_drape(frames: int = 40, **settings):
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=R)
+    q0, faces = _square(N)
+    piece = ClothPiece(faces, np.zeros(len(q0), bool), FABRICS["woven"])
+    collider = Collider(np.asarray(sphere.faces), lambda f: (sphere.vertices + CENTRE, q0), 30.0, frames)
+    return q0, drape([piece], collider, ClothSettings(settle_s=0.0, **settings), names=["square"])
+
+
+@pytest.fixture(scope="module")
+def sphere_drape():
+    return _sphere_drape()
+
+
+def test_a_square_cloth_falls_freely_then_settles_on_a_sphere_without_entering_it(sphere_drape):
+    q0, q = sphere_drape
+    corner = 0
+    # frame f ends at t = (f + 1) / 30 s; the cloth's centre meets the sphere at ~0.1 s (frame 2)
+    for f in (0, 1):
+        t = (f + 1) / 30.0
+        assert q0[corner, 1] - q[f, corner, 1] == pytest.approx(0.5 * G * t * t, abs=1.5e-3)
+    # the lowest point of the sphere's triangles is a chord's sag (< 1 mm here) under its radius
+    assert np.linalg.norm(q - CENTRE, axis=2).min() > R - 1e-3
+    mid = len(q0) // 2  # rests on the top, a particle radius over it
+    assert q[-1, mid, 1] == pytest.approx(CENTRE[1] + R + ClothSettings().particle_radius, abs=0.002)
+    assert q[-1, corner, 1] < CENTRE[1] + R - 0.3                     # the corners hang down
+    speed = np.linalg.norm(np.diff(q, axis=0), axis=2).mean(1) * 30.0
+    assert speed[-5:].max() < 0.02 * speed.max()                       # motion dies away
+    edges = np.linalg.norm(q[-1, 1:N] - q[-1, :N - 1], axis=1)         # one row of the grid
+    assert edges.max() < 1.05 * 0.8 / (N - 1)                          # the cloth barely stretches
+
+
+def test_a_diverging_cloth_is_an_error_naming_it_and_the_frame():
+    with pytest.raises(ClothError, match=r"square diverged at clip frame 0 .*substeps"):
+        _sphere_drape(frames=2, max_drift=1e-4)
+
+
+def _skirt_subject(cloth: str = "simulated"):
+    import synmitsuba as sm
+    recipe = sm.sample_subject(np.random.default_rng(5), {"outfit": ["tshirt", "skirt"], "jacket": False,
+                                                          "shoes": True, "cloth": cloth, "texture_size": 64})
+    return sm.build_subject(recipe)
+
+
+def _walk(human, seconds: float = 1.0):
+    import synmitsuba as sm
+    return sm.retarget(sm.procedural_motion("walk", np.random.default_rng(0), seconds=seconds), human.skeleton)
+
+
+@pytest.fixture(scope="module")
+def skirt_walk():
+    human = _skirt_subject()
+    clip = _walk(human)
+    return human, clip, simulate_cloth(human, clip)
+
+
+def _closed_body(human, layers):
+    body = np.empty_like(human.body.vertices)
+    body[human.split.source] = layers[0].vertices
+    return body
+
+
+def test_a_simulated_skirt_stays_outside_the_legs_at_every_frame_and_swings(skirt_walk):
+    human, clip, track = skirt_walk
+    skirt = track.frames["skirt"]
+    assert skirt.shape == (clip.n_frames, len(human.parts[-1].rest) if human.parts[-1].name == "skirt"
+                           else next(len(p.rest) for p in human.parts if p.name == "skirt"), 3)
+    swing = 0.0
+    for f in range(clip.n_frames):
+        layers = human.pose(*clip.frame(f))
+        body = _closed_body(human, layers)
+        skinned = next(layer.vertices for layer in layers if layer.name == "skirt")
+        # candidates: within 3 cm of a body vertex and less than 5 mm in front of its tangent
+        # plane (trimesh's normals); the winding number says which are inside
+        d, i = cKDTree(body).query(skirt[f])
+        normals = trimesh.Trimesh(body, human.body.faces, process=False).vertex_normals
+        near = (d < 0.03) & (np.einsum("ij,ij->i", skirt[f] - body[i], normals[i]) < 0.005)
+        w = winding_numbers(body, human.body.faces, skirt[f][near])
+        inside = np.flatnonzero(near)[w > 0.5]
+        assert len(inside) <= 0.005 * len(skirt[f]), f"frame {f}: {len(inside)} skirt vertices inside the body"
+        for i in inside:  # and those barely: within 5 mm of the surface (the triangles within 5 cm)
+            tri = body[human.body.faces]
+            close = (np.linalg.norm(tri - skirt[f][i], axis=2) < 0.05).any(1)
+            assert point_triangle_distances(skirt[f][i:i + 1], tri[close]).min() < 0.005
+        top = skinned[:, 1] >= skinned[:, 1].max() - 0.005
+        assert np.abs(skirt[f][top] - skinned[top]).max() < 0.01  # the waistband moves with the body
+        swing = max(swing, float(np.linalg.norm(skirt[f] - skinned, axis=1).max()))
+    assert swing > 0.03  # not the skinned skirt: it hangs and lags
+
+
+CHILD = """
+import sys, numpy as np, synmitsuba as sm
+from synmitsuba.process import configure_process
+configure_process(torch_threads={torch_threads})  # the body model's threads as the parent's (anny's sums split by them)
+sys.path.insert(0, {tests!r})
+from test_cloth import _skirt_subject, _walk
+h = _skirt_subject()
+np.save({out!r}, sm.simulate_cloth(h, _walk(h)).frames["skirt"])
+"""
+
+
+def test_simulation_is_bit_identical_in_another_process(skirt_walk, tmp_path):
+    """Another process with one thread for everything else (numpy, drjit, Warp's CPU kernels
+    are serial anyway); torch's threads pinned as workers pin them (``configure_process``)."""
+    import os
+
+    import torch
+    out = str(tmp_path / "skirt.npy")
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "DRJIT_NUM_THREADS": "1"}
+    subprocess.run([sys.executable, "-c", CHILD.format(tests=os.path.dirname(__file__), out=out,
+                                                            torch_threads=torch.get_num_threads())], check=True, env=env,
+                   capture_output=True)
+    assert np.array_equal(np.load(out), skirt_walk[2].frames["skirt"])
+
+
+def test_placed_subjects_carry_simulated_cloth_into_the_scene_and_labels(sm):
+    from synmitsuba.compose.subjects import ClipSettings, placed_subject, subject_specs
+    entry = {"seed": 5, "motion": "walk", "config": {"outfit": ["tshirt", "skirt"], "jacket": False, "shoes": False,
+                                                     "cloth": "simulated", "texture_size": 64}}
+    specs, humans = subject_specs([entry], np.random.default_rng(0), set(), clip=ClipSettings(seconds=0.4))
+    assert json.loads(specs[0].recipe.to_json())["cloth"] == "simulated"
+    p = placed_subject(specs[0], 0, humans[0])
+    assert p.cloth is not None and p.cloth.n_frames == p.motion.n_frames
+    scene = sm.Scene()
+    p.pose_in(scene, 7)
+    assert np.allclose(scene.meshes["subject0_skirt"].vertices, p.cloth.frames["skirt"][7], atol=1e-6)
+    skirt = next(layer for layer in p.layers(7) if layer.name == "skirt")
+    assert np.array_equal(skirt.vertices, p.cloth.frames["skirt"][7])  # what the labels see
+    half = p.cloth.at(6.5)["skirt"]
+    assert np.allclose(half, 0.5 * (p.cloth.frames["skirt"][6] + p.cloth.frames["skirt"][7]))
+
+
+def test_skinned_cloth_is_todays_path(sm):
+    """cloth: skinned (the default, and what recipes written before the cloth stage read as)
+    poses exactly as ``LayeredHuman.pose`` without garments."""
+    from synmitsuba.compose.subjects import ClipSettings, placed_subject, subject_specs
+    entry = {"seed": 5, "motion": "walk", "config": {"outfit": ["tshirt", "skirt"], "texture_size": 64}}
+    specs, humans = subject_specs([entry], np.random.default_rng(0), set(), clip=ClipSettings(seconds=0.2))
+    d = json.loads(specs[0].recipe.to_json())
+    assert d.pop("cloth") == "skinned" and sm.SubjectRecipe.from_dict(d).cloth == "skinned"
+    p = placed_subject(specs[0], 0, humans[0])
+    assert p.cloth is None
+    for got, want in zip(p.layers(3), p.human.pose(*p.motion.frame(3), face=p.motion.face_at(3))):
+        assert got.name == want.name and np.array_equal(got.vertices, want.vertices)
