@@ -85,6 +85,8 @@ class Collider:
     at: Callable[[int], tuple[np.ndarray, np.ndarray]]
     fps: float
     n_frames: int
+    project: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None  # (collider vertices, particles) ->
+    # particles moved out of the collider, after each frame (the solver's contacts are soft)
 
 
 @dataclass
@@ -129,13 +131,31 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
         body[human.split.source] = layers[0].vertices
         return body, np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
 
-    q = drape([g.piece for g in garments], Collider(human.body.faces, at, motion.fps, motion.n_frames), settings,
+    s = settings or ClothSettings()
+
+    def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
+        return out_of_body(human, body, q, s.particle_radius / 2)
+
+    q = drape([g.piece for g in garments], Collider(human.body.faces, at, motion.fps, motion.n_frames, project), s,
               names=[g.name for g in garments])
     frames, start = {}, 0
     for g in garments:
         frames[g.name] = q[:, start:start + len(g.rows)][:, g.index]
         start += len(g.rows)
     return ClothTrack(frames)
+
+
+def out_of_body(human, body: np.ndarray, q: np.ndarray, margin: float) -> np.ndarray:
+    """Particles under ``margin`` over the posed body set ``margin`` over it, along the
+    outward normal at the exact closest point (``body.collide.Surface.clearance``): the
+    solver's contacts are springs, and a fast thigh can carry a few vertices under the skin."""
+    from synmitsuba.body.collide import Surface
+    surface = Surface.of(body, human.body.faces, human._incidence, human._around)
+    height, normal = surface.clearance(q, band=margin)
+    low = np.flatnonzero(height < margin)
+    q = q.copy()
+    q[low] += normal[low] * (margin - height[low])[:, None]
+    return q
 
 
 def drape(pieces: list[ClothPiece], collider: Collider, settings: ClothSettings | None = None,
@@ -207,6 +227,11 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
             s0.clear_forces()
             solver.step(s0, s1, control, contacts, dt)
             s0, s1 = s1, s0
+        q = s0.particle_q.numpy()
+        if collider.project is not None:
+            q = collider.project(now[0], q.astype(np.float64))
+            q[held] = now[1][held]
+            s0.particle_q.assign(q.astype(np.float32))
         if f >= 0:
             out[f] = s0.particle_q.numpy()
             _check(out[f], now[1], pieces, names, f, s.max_drift)

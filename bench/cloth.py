@@ -1,0 +1,180 @@
+"""The cloth stage against skinned garments (issue 34's goals), per subject x motion clip.
+
+Each subject wears a skirt or a dress (alternately; with a t-shirt under a skirt), built once
+and put through each motion; per clip the cloth stage simulates the garment
+(``synmitsuba.simulate_cloth``) and, on the same frames, the skinned garment is posed as before.
+Printed as JSON, each for the simulated and the skinned garment:
+- penetration: the share of garment vertices inside the posed body (candidates within 3 cm of a
+  body vertex and under 5 mm in front of its tangent plane, confirmed by a winding number over
+  0.5: tests/reference.py), away from the body's own self-overlaps (where the closest body
+  vertex, 2 mm out along its normal, is itself inside: a thigh run into the buttock), and the
+  deepest (exact distance to the body's triangles), worst frame per clip;
+- folds: the mean squared mean curvature left after taking out its average over 7.5 cm (so the
+  body-scale shape, hips and a flare's cone, drops out and folds 2-15 cm across remain), over
+  the hanging cloth (not a held waistband or bodice), hem band left out; median over frames;
+- hem lag (walk, jog, run): the lag in ms that best lines up the hem's horizontal velocity with
+  the hip's (both less the clip's mean travel), searched over 0-300 ms;
+- seconds per simulated frame (settling included), and the first clip's seconds (Warp loads,
+  or with ``--cold-cache`` compiles, Newton's kernels).
+
+    python bench/cloth.py [--subjects 10] [--motions walk,run,squat,jump,turn] [--seconds 1.0] [--cold-cache]
+"""
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def closed_body(human, layers) -> np.ndarray:
+    body = np.empty_like(human.body.vertices)
+    body[human.split.source] = layers[0].vertices
+    return body
+
+
+def inside(points, body, faces) -> tuple[float, float]:
+    """(share of ``points`` inside the closed body, deepest metres)."""
+    import trimesh
+    from reference import point_triangle_distances, winding_numbers
+    from scipy.spatial import cKDTree
+    d, i = cKDTree(body).query(points)
+    normals = trimesh.Trimesh(body, faces, process=False).vertex_normals
+    near = np.flatnonzero((d < 0.03) & (np.einsum("ij,ij->i", points - body[i], normals[i]) < 0.005))
+    ins = near[winding_numbers(body, faces, points[near]) > 0.5] if len(near) else near
+    if len(ins):  # not where the body runs into itself (a thigh into the buttock): its own surface is inside there
+        own = body[i[ins]] + 0.002 * normals[i[ins]]
+        ins = ins[winding_numbers(body, faces, own) < 0.5]
+    tri, deep = body[faces], 0.0
+    for k in ins:
+        close = (np.linalg.norm(tri - points[k], axis=2) < 0.05).any(1)
+        deep = max(deep, float(point_triangle_distances(points[k:k + 1], tri[close]).min()))
+    return len(ins) / len(points), deep
+
+
+class Surface:
+    """A garment's cloth without its hem band, welded: neighbours for the curvature."""
+
+    def __init__(self, human, name: str):
+        from synmitsuba.body.topology import weld
+        part = next(p for p in human.parts if p.name == name)
+        mesh = next(g for g in human.garments if g.params.kind == name)
+        n_cloth = len(part.rest) - mesh.hem[1]
+        faces = part.faces[:len(part.faces) - mesh.hem[0]]
+        rep = weld(part.rest[:n_cloth])
+        self.rows, index = np.unique(rep, return_inverse=True)
+        self.faces = index.reshape(-1)[faces]
+        n = len(self.rows)
+        from scipy import sparse
+        e = np.concatenate([self.faces[:, [0, 1]], self.faces[:, [1, 2]], self.faces[:, [2, 0]]])
+        adj = sparse.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), (n, n)).tocsr()
+        adj.data[:] = 1.0
+        self.mean = sparse.diags(1.0 / np.asarray(adj.sum(1)).ravel()) @ adj
+        from synmitsuba.cloth import CLOTH_KINDS  # the cloth that hangs (a dress's skirt, not its bodice)
+        self.free = ~CLOTH_KINDS[name].held(part.rest[self.rows], human.regions)
+
+    def fold_energy(self, vertices: np.ndarray) -> float:
+        """Mean squared (mean curvature less its 7.5 cm average), 1/m^2."""
+        import trimesh
+        from scipy.spatial import cKDTree
+        x = vertices[self.rows]
+        n = trimesh.Trimesh(x, self.faces, process=False).vertex_normals
+        lap = self.mean @ x - x
+        edge2 = np.maximum(self.mean @ np.einsum("ij,ij->i", x, x) - 2 * np.einsum("ij,ij->i", self.mean @ x, x)
+                           + np.einsum("ij,ij->i", x, x), 1e-12)  # mean squared edge length per vertex
+        h = 4 * np.einsum("ij,ij->i", lap, n) / edge2
+        balls = cKDTree(x).query_ball_point(x, 0.075)
+        local = np.array([h[b].mean() for b in balls])
+        return float(np.mean(((h - local) ** 2)[self.free]))
+
+
+def hem_lag_ms(hem: np.ndarray, hip: np.ndarray, fps: float) -> float:
+    """The lag (ms, 0-300) that best lines up the hem centroid's horizontal velocity with the hip's."""
+    vh, vp = np.diff(hem[:, [0, 2]], axis=0), np.diff(hip[:, [0, 2]], axis=0)
+    vh, vp = vh - vh.mean(0), vp - vp.mean(0)
+    best, lag = -np.inf, 0
+    for k in range(0, min(int(0.3 * fps), len(vp) - 5) + 1):
+        c = float(np.sum(vp[:len(vp) - k] * vh[k:]) / max(len(vp) - k, 1))
+        if c > best:
+            best, lag = c, k
+    return 1000.0 * lag / fps
+
+
+def clip_measures(sm, human, garment: str, motion: str, seconds: float, surface: Surface) -> dict:
+    clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=seconds), human.skeleton)
+    t = time.perf_counter()
+    track = sm.simulate_cloth(human, clip)
+    sim_s = time.perf_counter() - t
+    settle = int(round(sm.ClothSettings().settle_s * clip.fps))
+    out: dict = {"sim": {"inside": [], "deepest": [], "folds": []}, "skinned": {"inside": [], "deepest": [], "folds": []}}
+    rest = next(p.rest for p in human.parts if p.name == garment)[surface.rows]
+    low = rest[:, 1] < rest[:, 1].min() + 0.01
+    hems = {"sim": [], "skinned": []}
+    for f in range(clip.n_frames):
+        layers = human.pose(*clip.frame(f))
+        body = closed_body(human, layers)
+        for kind, v in (("sim", track.frames[garment][f]), ("skinned", next(la.vertices for la in layers if la.name == garment))):
+            share, deep = inside(v, body, human.body.faces)
+            out[kind]["inside"].append(share)
+            out[kind]["deepest"].append(deep)
+            out[kind]["folds"].append(surface.fold_energy(v))
+            hems[kind].append(v[surface.rows][low].mean(0))
+    hip = clip.joint_positions()[:, 0]
+    res = {"seconds_per_frame": sim_s / (clip.n_frames + settle), "sim_s": sim_s}
+    for kind in ("sim", "skinned"):
+        o = out[kind]
+        res[kind] = {"inside_share_worst_frame": max(o["inside"]), "deepest_m": max(o["deepest"]),
+                     "fold_energy": float(np.median(o["folds"]))}
+        if motion in ("walk", "jog", "run"):
+            res[kind]["hem_lag_ms"] = hem_lag_ms(np.array(hems[kind]), hip, clip.fps)
+    return res
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--subjects", type=int, default=10)
+    ap.add_argument("--motions", default="walk,run,squat,jump,turn")
+    ap.add_argument("--seconds", type=float, default=1.0)
+    ap.add_argument("--cold-cache", action="store_true", help="compile Warp's kernels afresh (a temporary cache)")
+    args = ap.parse_args(argv)
+    if args.cold_cache:
+        os.environ["WARP_CACHE_PATH"] = tempfile.mkdtemp(prefix="warp-cold-")
+    import synmitsuba as sm
+    sm.set_variant()
+    rows, first_s = [], None
+    for i in range(args.subjects):
+        garment = ("skirt", "dress")[i % 2]
+        outfit = ["tshirt", "skirt"] if garment == "skirt" else ["dress"]
+        human = sm.build_subject(sm.sample_subject(np.random.default_rng(100 + i), {
+            "outfit": outfit, "jacket": False, "shoes": True, "cloth": "simulated", "texture_size": 64}))
+        surface = Surface(human, garment)
+        for motion in args.motions.split(","):
+            r = clip_measures(sm, human, garment, motion, args.seconds, surface)
+            first_s = r["sim_s"] if first_s is None else first_s
+            rows.append({"subject": i, "garment": garment, "motion": motion, **r})
+            print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    summary: dict = {"bench": "cloth", "clips": len(rows), "seconds": args.seconds, "cold_cache": args.cold_cache,
+                     "first_clip_s": round(first_s or 0.0, 1),
+                     "seconds_per_frame_median": round(float(np.median([r["seconds_per_frame"] for r in rows[1:] or rows])), 3)}
+    for kind in ("sim", "skinned"):
+        summary[kind] = {
+            "inside_share_median": float(np.median([r[kind]["inside_share_worst_frame"] for r in rows])),
+            "inside_share_max": float(max(r[kind]["inside_share_worst_frame"] for r in rows)),
+            "deepest_m_max": round(float(max(r[kind]["deepest_m"] for r in rows)), 4),
+            "fold_energy_median": round(float(np.median([r[kind]["fold_energy"] for r in rows])), 2)}
+        lags = [r[kind]["hem_lag_ms"] for r in rows if "hem_lag_ms" in r[kind]]
+        if lags:
+            summary[kind]["hem_lag_ms_median"] = round(float(np.median(lags)), 1)
+    summary["fold_ratio_sim_over_skinned"] = round(summary["sim"]["fold_energy_median"] /
+                                                   max(summary["skinned"]["fold_energy_median"], 1e-12), 2)
+    print(json.dumps(summary, indent=1))
+    return summary
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, os.path.join(HERE, "..", "tests"))  # reference.py: the independent inside test
+    main()
