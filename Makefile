@@ -88,6 +88,7 @@ bench: setup
 	$(PY) bench/motion_blur.py                                    # blur at 8 sub-frames / sharp, equal spp
 	$(PY) bench/motion_blur.py --config configs/hps.yaml --res 1280x720 --spp 64 --frames 3 --what rgb --denoise oidn   # where blur is on (~15 min)
 	$(PY) bench/motion_blur.py --res 512x512 --spp 64 --frames 3
+	$(PY) bench/cloth.py --subjects 10   # the cloth stage against skinned garments: penetration, folds, hem lag, cost (~1 h)
 	$(PY) bench/cloth_newton.py --frames 30 --figure out/bench/cloth_skirt.png
 	$(PY) bench/cloth_newton.py --frames 30 --motion walk --solvers vbd --figure out/bench/cloth_skirt_walk.png
 

@@ -151,6 +151,7 @@ def test_version_and_help_with_defaults(capsys):
     (["motion", "preview", "walk", "--frames", "0", "--out", "o"], ["--frames", "'0'"]),
     (["motion", "preview", "walk", "--seconds", "-2", "--out", "o"], ["--seconds"]),
     (["motion", "preview", "moonwalk", "--out", "o"], ["CLIP = 'moonwalk'", "walk"]),
+    (["motion", "preview", "walk", "--outfit", "tshirt,skort", "--out", "o"], ["--outfit = 'tshirt,skort'", "skirt"]),
     (["render", "nope.yaml", "--out", "o"], ["scene file", "nope.yaml", "no such file"]),
 ])
 def test_bad_arguments_get_one_line_and_exit_2(argv, names, tmp_path, capsys):

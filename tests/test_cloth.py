@@ -148,13 +148,18 @@ def test_simulation_is_bit_identical_across_processes_and_thread_counts(tmp_path
 
 
 def test_placed_subjects_carry_simulated_cloth_into_the_scene_and_labels(sm):
+    from dataclasses import replace as dc_replace
+
     from synmitsuba.compose.subjects import ClipSettings, placed_subject, subject_specs
     entry = {"seed": 5, "motion": "walk", "config": {"outfit": ["tshirt", "skirt"], "jacket": False, "shoes": False,
                                                      "cloth": "simulated", "texture_size": 64}}
     specs, humans = subject_specs([entry], np.random.default_rng(0), set(), clip=ClipSettings(seconds=0.4))
     assert json.loads(specs[0].recipe.to_json())["cloth"] == "simulated"
     p = placed_subject(specs[0], 0, humans[0])
+    assert p._cloth is None  # simulated on first use, not when placed (body-model fits need no cloth)
     assert p.cloth is not None and p.cloth.n_frames == p.motion.n_frames
+    track, p.motion = p.cloth, dc_replace(p.motion)  # composition aims the eyes after building the scene
+    assert p.cloth is track
     scene = sm.Scene()
     p.pose_in(scene, 7)
     assert np.allclose(scene.meshes["subject0_skirt"].vertices, p.cloth.frames["skirt"][7], atol=1e-6)

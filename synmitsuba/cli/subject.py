@@ -39,14 +39,21 @@ def _closeup_camera(human, w: int, h: int):
                           fov_y_deg=35, width=w, height=h)
 
 
-def _subject_in_stage(seed: int):
+def _subject_in_stage(seed: int, cloth: str = "skinned"):
+    """The sampled subject in the rest pose on a preview stage; with ``cloth`` "simulated" its
+    skirt or dress settled by the cloth stage (the same subject as skinned: the mode draws nothing)."""
     from synmitsuba.body.recipe import sample_subject
     from synmitsuba.body.subject import build_subject
+    from synmitsuba.cloth import simulate_cloth
     from synmitsuba.compose.stage import preview_stage
-    recipe = sample_subject(np.random.default_rng(seed))
+    from synmitsuba.motion.motion import Motion
+    recipe = sample_subject(np.random.default_rng(seed), {"cloth": cloth})
     human = build_subject(recipe)
     scene = preview_stage()
-    human.add_to(scene, instance=1)
+    J = len(human.skeleton)
+    rest = Motion(human.skeleton, np.broadcast_to(np.eye(3), (1, J, 3, 3)), np.zeros((1, 3)), 30.0)
+    track = simulate_cloth(human, rest) if cloth == "simulated" else None
+    human.add_to(scene, instance=1, garments=None if track is None else track.at(0))
     return recipe, human, scene
 
 
@@ -54,7 +61,7 @@ def turntable(args) -> int:
     import synmitsuba as sm
     output_dir(args.out)
     sm.set_variant(args.variant)
-    recipe, human, scene = _subject_in_stage(args.seed)
+    recipe, human, scene = _subject_in_stage(args.seed, args.cloth)
     with open(os.path.join(args.out, "recipe.json"), "w") as fh:
         json.dump(recipe.to_dict(), fh, indent=1, sort_keys=True)
     images = []
@@ -74,7 +81,7 @@ def sheet(args) -> int:
     sm.set_variant(args.variant)
     images = []
     for k in range(args.sheet):
-        _, human, scene = _subject_in_stage(args.seed + k)
+        _, human, scene = _subject_in_stage(args.seed + k, args.cloth)
         cam = _closeup_camera(human, *args.res) if args.closeup else _camera(human, 25.0, *args.res)
         images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
     print(sm.write_png(path, sm.contact_sheet(images, columns=min(6 if args.closeup else 8, args.sheet))))
@@ -94,5 +101,7 @@ def add_parser(sub) -> None:
                    "instead of a turntable")
     p.add_argument("--closeup", action="store_true", help="with --sheet: head and shoulders (default: the whole "
                    "body; docs/closeups.png is --sheet 12 --closeup --res 512x512 --spp 64)")
+    p.add_argument("--cloth", choices=("skinned", "simulated"), default="skinned",
+                   help="skirts and dresses skinned, or settled by the cloth stage (synmitsuba.cloth)")
     add_variant_option(p)
     p.set_defaults(func=lambda a: sheet(a) if a.sheet else turntable(a))

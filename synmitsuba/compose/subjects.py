@@ -131,7 +131,21 @@ class PlacedSubject:
     instance: int
     prefix: str
     fits: dict = field(default_factory=dict)  # body-model fits by kind ("smplx", "smpl"): annotate.smplx_fit
-    cloth: ClothTrack | None = None  # the simulated garments over the clip (recipe cloth: simulated)
+    simulated: bool = False  # the recipe's cloth: simulated
+    cloth_motion: Motion | None = None  # the clip before its eyes were aimed: what the cloth hangs on
+    _cloth: ClothTrack | None = field(default=None, repr=False)
+
+    @property
+    def cloth(self) -> ClothTrack | None:
+        """The simulated garments over the clip (None when skinned), simulated on first use
+        (labels that need no render, e.g. body-model fits, never pay for it) against
+        ``cloth_motion``: aiming the eyes (composition does it after building the scene) moves
+        no cloth, and a subject rebuilt from its spec hangs the same cloth bit for bit."""
+        if not self.simulated:
+            return None
+        if self._cloth is None:
+            self._cloth = simulate_cloth(self.human, self.cloth_motion or self.motion)
+        return self._cloth
 
     def garments_at(self, time: float) -> dict | None:
         """The simulated garments' vertices at (fractional) clip frame ``time``; None when skinned."""
@@ -177,9 +191,8 @@ def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) ->
     motion = place_motion(clip, s.position, s.yaw_deg, s.lift)
     if s.motion.start:
         motion = motion.rolled(s.motion.start)
-    motion = aimed(motion, s.gaze)
-    cloth = simulate_cloth(human, motion) if human.recipe.cloth == "simulated" else None
-    return PlacedSubject(human, motion, 0, s.instance, f"subject{i}", cloth=cloth)
+    return PlacedSubject(human, aimed(motion, s.gaze), 0, s.instance, f"subject{i}",
+                         simulated=human.recipe.cloth == "simulated", cloth_motion=motion)
 
 
 def draw_hands(rng: np.random.Generator, motion: Motion) -> HandTrack:
