@@ -133,7 +133,6 @@ def subjects_geometry(subjects: list, frame: int) -> Geometry:
         if not 0 <= int(frame) < p.motion.n_frames:
             raise ConfigError("frame", frame, f"the clip has frames 0..{p.motion.n_frames - 1}: there is no flow "
                               "before the first frame or past the last")
-        rot, root = p.motion.frame(int(frame))
         for layer in p.layers(int(frame)):
             if layer.is_curves:
                 g.curves[f"{p.prefix}_{layer.name}"] = layer.points

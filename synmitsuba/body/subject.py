@@ -422,8 +422,7 @@ class LayeredHuman:
         """Garments (inner first) out of the posed body, then out of the garments under them,
         but for the ``simulated`` ones (their solver kept them out); returns the posed body's
         surface."""
-        body = np.empty_like(self.body.vertices)
-        body[self.split.source] = layers[0].vertices
+        body = self.closed_body(layers)
         surface, inner = Surface.of(body, self.body.faces, self._incidence, self._around), list[Surface]()
         for part, layer in zip(self.parts, layers):
             if part.collider is None:
@@ -433,6 +432,13 @@ class LayeredHuman:
             if part.inner:
                 inner.append(Surface.of(layer.vertices, layer.faces, part.collider.incidence))
         return surface
+
+    def closed_body(self, layers: list[PosedLayer]) -> np.ndarray:
+        """The posed body layer's vertices on the closed body mesh (``body.faces``): the layer
+        splits the mesh along its uv seams."""
+        body = np.empty_like(self.body.vertices)
+        body[self.split.source] = layers[0].vertices
+        return body
 
     def keypoints(self, rotations=None, root_translation=None, face=None) -> np.ndarray:
         """COCO-17 + 6 foot keypoints (23, 3), world metres: anny's regressor (on the body moved

@@ -129,9 +129,7 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
 
     def at(frame: int) -> tuple[np.ndarray, np.ndarray]:  # (closed body, skinned garments' particles)
         layers = human.pose(*motion.frame(frame), face=motion.face_at(frame))
-        body = np.empty_like(human.body.vertices)
-        body[human.split.source] = layers[0].vertices
-        return body, np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
+        return human.closed_body(layers), np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
 
     s = settings or ClothSettings()
 
