@@ -115,7 +115,9 @@ def test_a_new_garment_kind_is_one_table_entry(sm):
         r = human.regions
         assert len(vest.rest) > 500 and vest.layer == int(Layer.TOP)
         chin_below = human.keypoints()[0, 1] - 0.06  # the nose, less a nose-to-chin height
-        assert r.crotch_y - 0.15 < vest.rest[:, 1].min() and vest.rest[:, 1].max() < chin_below  # the torso
+        front = (vest.rest[:, 2] > r.neck_xz[1]) & (np.abs(vest.rest[:, 0]) < 0.05)  # under the chin
+        assert r.crotch_y - 0.15 < vest.rest[:, 1].min() and vest.rest[front, 1].max() < chin_below  # the torso
+        assert vest.rest[:, 1].max() < r.neck_y + 0.07  # over the trapezius: the collar, an offset above the neck's base
         assert np.abs(vest.rest[:, 0]).max() < 0.3  # sleeve length 0: no arms
     finally:
         del garments.GARMENTS["vest"]

@@ -16,6 +16,8 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.collide import neighbour_mean
+from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, foot_points, sample_shoe_texture, shaft_mesh, shoe_material,
+                                   shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
 from synmitsuba.geometry import face_normals, vertex_normals
@@ -59,12 +61,13 @@ def _top(sleeve: Callable[[float], float], dress: bool = False):
 NECK_EASE = 0.012           # metres a neckline stands off the neck, around its base
 NECK_DROP = (0.012, 0.03)   # metres under the neck's base a neckline reaches at the back, at the front
 NECK_ROUND = 0.02           # metres over which the neckline turns from the front's dip to round the neck
+NECK_TOP = 0.03             # metres over the neck's base a neckline reaches at most (over the trapezius)
 
 
 def _neckline(r, v: np.ndarray) -> np.ndarray:
     """A crew neckline's field (>= 0 covered): a point is covered if it is farther than the
     neck's radius and ``NECK_EASE`` from the neck's axis or lower than the neckline's lowest
-    reach (``NECK_DROP``, deeper at the front), and in any case not over 4 cm above the neck's
+    reach (``NECK_DROP``, deeper at the front), and in any case not over ``NECK_TOP`` above the neck's
     base (the union rounded over ``NECK_ROUND``, or the edge has a corner where it leaves the
     dip). So the edge runs round the neck over the trapezius and dips onto the chest at the
     front, and one field for every body group leaves no step where the torso meets the
@@ -75,7 +78,7 @@ def _neckline(r, v: np.ndarray) -> np.ndarray:
     low = r.neck_y - (NECK_DROP[0] + (NECK_DROP[1] - NECK_DROP[0]) * front)
     a, b = rho - (r.neck_radius + NECK_EASE), low - v[:, 1]
     either = 0.5 * (a + b + np.sqrt((a - b) ** 2 + NECK_ROUND ** 2))  # max(a, b), rounded where the two meet
-    return np.minimum(either, r.neck_y + 0.04 - v[:, 1])
+    return np.minimum(either, r.neck_y + NECK_TOP - v[:, 1])
 
 
 def _bottom(reach: Callable[[float], float]):
@@ -112,6 +115,7 @@ class GarmentKind:
     skirted: bool = False         # a skirt or a dress (rare in men's sampled outfits)
     tucks_tops: bool = False      # tops worn with it end tucked under the waist
     takes_jacket: bool = True     # a sampled jacket may go over it
+    material: Callable | None = None  # (params, texture size) -> Material; None: garment_material
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
@@ -131,6 +135,11 @@ GARMENTS: dict[str, GarmentKind] = {
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
                          (0.005, 0.03), skirted=True, takes_jacket=False),
     "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none", footwear=True),
+    # built round the foot (body/shoes.py); thickness is the sole's height, length the collar's (and shaft's)
+    **{name: GarmentKind(Layer.SHOES, ALLOWANCE, 0, "shoe", None, (0.0, 1.0), (0.0, 0.004), sole, fabric="none",
+                         footwear=True, material=lambda g, size: shoe_material(SHOE_STYLES[g.kind], g.texture, size))
+       for name, sole in (("sneakers", (0.02, 0.032)), ("boots", (0.02, 0.032)), ("dress_shoes", (0.012, 0.018)),
+                          ("sandals", (0.01, 0.022)))},
 }
 KINDS = tuple(GARMENTS)
 # outfits sample_subject draws from (a jacket and shoes are added by chance)
@@ -144,16 +153,32 @@ class GarmentParams(Params):
     size: float = spec(0.5, Number(0, 1), doc="S..XL as 0..1")
     ease: float = spec(0.01, Number(0, 0.06), doc="looseness, metres")
     length: float = spec(0.5, Number(0, 1), doc="along the kind's range")
-    thickness: float = spec(0.003, Number(0.0005, 0.02), doc="metres")
+    thickness: float = spec(0.003, Number(0.0005, 0.04), doc="metres (footwear: the sole)")
     texture: GarmentTextureParams = spec(factory=GarmentTextureParams, check=Nested(GarmentTextureParams))
+
+
+# footwear drawn with an outfit: no boots under long trousers (their shaft would cut through the legs)
+FOOTWEAR = {"sneakers": 0.5, "dress_shoes": 0.2, "boots": 0.15, "sandals": 0.15}
+
+
+def sample_footwear(shoes: GarmentParams, outfit) -> GarmentParams:
+    """A styled pair in place of a sampled ``shoes`` entry, drawn from its texture seed (so the
+    subject's other draws are the ones they were before shoes had styles)."""
+    rng = np.random.default_rng([shoes.texture.seed, 7])
+    weights = {k: 0.0 if k == "boots" and "trousers" in outfit else w for k, w in FOOTWEAR.items()}
+    p = np.array(list(weights.values()))
+    kind = list(weights)[int(rng.choice(len(p), p=p / p.sum()))]
+    return sample_garment(kind, rng)
 
 
 def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
     from synmitsuba.body.textures import sample_garment_texture
     k = GARMENTS[kind]
+    style = SHOE_STYLES.get(kind)
     return GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*k.ease)), 4),
                          length=round(float(rng.uniform(*k.length)), 3),
-                         thickness=round(float(rng.uniform(*k.thickness)), 4), texture=sample_garment_texture(rng))
+                         thickness=round(float(rng.uniform(*k.thickness)), 4),
+                         texture=sample_shoe_texture(style, rng) if style else sample_garment_texture(rng))
 
 
 @dataclass
@@ -289,8 +314,15 @@ class GarmentMesh:
 
 def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
     size = 0.7 + 0.6 * g.size
+    if GARMENT_SHAPES[GARMENTS[g.kind].shape].sole:
+        return GARMENTS[g.kind].offset + g.ease * size  # the upper's allowance over the foot
     fit = 0.004 * g.size  # a larger size sits further out even with no ease
     return max(GARMENTS[g.kind].offset + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
+
+
+def footwear_lift(g: GarmentParams) -> float:
+    """How far a pair of shoes lifts the body: its sole (a convex hull shoe: its offset)."""
+    return g.thickness if GARMENT_SHAPES[GARMENTS[g.kind].shape].sole else garment_offset(g)
 
 
 def _region(kind: GarmentKind) -> Callable:
@@ -317,22 +349,57 @@ def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
 
 
+SHOE_EDGE = 0.003  # metres: the upper's thickness, turned in along its top line
+
+
+def _shoe_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+    """A pair of ``body.shoes`` shoes (and boot shafts) round the feet, the top lines hemmed."""
+    style = SHOE_STYLES[g.kind]
+    parts = []
+    for side in (1.0, -1.0):
+        foot = foot_points(body, r, side)
+        parts.append(shoe_mesh(foot, style, g.thickness, offset, g.length))
+        if style.shaft[1]:
+            top = g.thickness + style.shaft[0] + (style.shaft[1] - style.shaft[0]) * g.length
+            parts.append(shaft_mesh(foot, g.thickness, top, offset))
+    n = np.cumsum([0] + [len(p[0]) for p in parts])
+    v, f, uv = (np.concatenate(x) for x in ([p[0] for p in parts], [p[1] + k for p, k in zip(parts, n)],
+                                             [p[2] for p in parts]))
+    return hem(body, v, f, uv, SHOE_EDGE)
+
+
+def _rigid_feet(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Shoes are rigid on the feet: under the ankle a vertex follows its side's foot bone alone
+    (the sole stays flat), and a boot's shaft blends to its bound weights (the shin) over the
+    6 cm above the ankle."""
+    sk = body.skeleton
+    foot = np.zeros_like(weights)
+    foot[np.arange(len(v)), np.where(v[:, 0] > 0, sk.index("foot.L"), sk.index("foot.R"))] = 1.0
+    t = np.clip((v[:, 1] - sk.rest_positions[sk.index("foot.L"), 1]) / 0.06, 0.0, 1.0)[:, None]
+    return ((1 - t) * foot + t * weights).astype(weights.dtype)
+
+
 @dataclass(frozen=True)
 class GarmentShape:
     """How a garment kind's rest mesh is made: ``build(body, regions, split, params, cut params,
-    offset) -> (vertices, faces, uv)``; ``hemmed``: its open edges get a hem (a closed hull has none)."""
+    offset) -> (vertices, faces, uv)``; ``hemmed``: its open edges get a hem of the cloth's
+    thickness (a closed hull has none, a shoe hems its own); ``weights(body, regions, vertices,
+    bound weights) -> weights``: skinning other than the closest body point's."""
 
     build: Callable
     hemmed: bool = True
-    spans_legs: bool = False  # hangs across both legs: skinned to both, not bound to the nearer
+    weights: Callable | None = None
+    sole: bool = False  # the garment's thickness is a sole the body stands on, not cloth over it
 
 
 # A new garment shape is one entry here; GarmentKind.shape names one.
 GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell": GarmentShape(_shell_shape),
-    "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y), spans_legs=True),
-    "shell+flare": GarmentShape(_dress_shape, spans_legs=True),
+    "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y),
+                          weights=lambda *a: both_legs_weights(*a)),  # hangs across both legs: skinned to both
+    "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
+    "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_rigid_feet, sole=True),
 }
 
 

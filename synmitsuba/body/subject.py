@@ -16,8 +16,8 @@ from synmitsuba.body.brows import BROW_RADIUS, LASH_RADIUS, eye_region, grow_bro
 from synmitsuba.body.expressions import face_units
 from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
-from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, both_legs_weights,
-                                      build_garment, garment_offset, metres_per_uv)
+from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment,
+                                      footwear_lift, metres_per_uv)
 from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.hand_points import HandPoints, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
@@ -97,12 +97,12 @@ class LayeredHuman:
                               "synmitsuba.body.smplx_model.smplx_body for a bare SMPL-X body")
         self.recipe = recipe
         body = anny_body(recipe.phenotypes)
-        self.regions: BodyRegions = body_regions(body)
         shoes = [g for g in recipe.garments if GARMENTS[g.kind].footwear]
-        lift = garment_offset(shoes[0]) if shoes else 0.0  # the shoe soles stand on the ground
+        lift = footwear_lift(shoes[0]) if shoes else 0.0  # the shoe soles stand on the ground
         body.vertices = body.vertices + [0, lift, 0]
         body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
                                             body.skeleton.rest_positions + [0, lift, 0])
+        self.regions: BodyRegions = body_regions(body)  # on the lifted body: hems at heights over its soles
         self.eyes: Eyeballs = fit_eyeballs(body.vertices, body.skeleton)
         body.vertices = hide_helpers(body.vertices, self.eyes)
         rest = body.skeleton.rest_positions.copy()
@@ -128,10 +128,10 @@ class LayeredHuman:
             self.garments.append(m)
             b = bind(body.vertices, body.faces, body.weights, m.vertices, body.surface())
             kind = GARMENTS[g.kind]
-            spans = GARMENT_SHAPES[kind.shape].spans_legs
-            weights = both_legs_weights(body, self.regions, m.vertices, b.weights) if spans else b.weights
-            material = garment_material(g.texture, size, fabric=kind.fabric,
-                                        metres_per_uv=metres_per_uv(m.vertices, m.faces, m.uv))
+            skin_with = GARMENT_SHAPES[kind.shape].weights
+            weights = skin_with(body, self.regions, m.vertices, b.weights) if skin_with else b.weights
+            material = kind.material(g, size) if kind.material else garment_material(
+                g.texture, size, fabric=kind.fabric, metres_per_uv=metres_per_uv(m.vertices, m.faces, m.uv))
             collider = GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset), body.faces[b.triangle],
                                        b.barycentric)
             self.parts.append(_Part(g.kind, m.layer, material, m.vertices, m.faces, m.uv, weights, collider))

@@ -39,6 +39,20 @@ def _closeup_camera(human, w: int, h: int):
                           fov_y_deg=35, width=w, height=h)
 
 
+def _feet_camera(human, w: int, h: int):
+    """Both feet from the front right and a little above, as a full-body crop's feet show."""
+    from synmitsuba.scene.camera import Camera
+    sk = human.body.skeleton
+    ankles = sk.rest_positions[[sk.index("foot.L"), sk.index("foot.R")]]
+    target = np.array([ankles[:, 0].mean(), 0.06, ankles[:, 2].mean() + 0.06])
+    a = np.radians(30.0)
+    return Camera.look_at(eye=tuple(target + 0.75 * np.array([np.sin(a), 0.45, np.cos(a)])), target=tuple(target),
+                          fov_y_deg=35, width=w, height=h)
+
+
+CLOSEUPS = {"head": _closeup_camera, "feet": _feet_camera}
+
+
 def _subject_in_stage(seed: int, cloth: str = "skinned"):
     """The sampled subject in the rest pose on a preview stage; with ``cloth`` "simulated" its
     skirt or dress settled by the cloth stage (the same subject as skinned: the mode draws nothing)."""
@@ -82,7 +96,7 @@ def sheet(args) -> int:
     images = []
     for k in range(args.sheet):
         _, human, scene = _subject_in_stage(args.seed + k, args.cloth)
-        cam = _closeup_camera(human, *args.res) if args.closeup else _camera(human, 25.0, *args.res)
+        cam = CLOSEUPS[args.closeup](human, *args.res) if args.closeup else _camera(human, 25.0, *args.res)
         images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
     print(sm.write_png(path, sm.contact_sheet(images, columns=min(6 if args.closeup else 8, args.sheet))))
     return 0
@@ -99,8 +113,9 @@ def add_parser(sub) -> None:
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel")
     p.add_argument("--sheet", type=natural_int, default=0, help="render this many subjects into one contact sheet "
                    "instead of a turntable")
-    p.add_argument("--closeup", action="store_true", help="with --sheet: head and shoulders (default: the whole "
-                   "body; docs/closeups.png is --sheet 12 --closeup --res 512x512 --spp 64)")
+    p.add_argument("--closeup", nargs="?", const="head", choices=tuple(CLOSEUPS), default=None,
+                   help="with --sheet: head and shoulders (default: the whole body; docs/closeups.png is --sheet 12 "
+                   "--closeup --res 512x512 --spp 64), or with 'feet' both feet (docs/shoes.png)")
     p.add_argument("--cloth", choices=("skinned", "simulated"), default="skinned",
                    help="skirts and dresses skinned, or settled by the cloth stage (synmitsuba.cloth)")
     add_variant_option(p)

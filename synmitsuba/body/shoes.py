@@ -1,0 +1,264 @@
+"""Shoes built round each foot of the rest body: a flat sole that stands on the ground and an
+upper with a toe box, a heel counter, a collar, a throat with laces, and (boots) a shaft.
+
+A shoe is one grid of rings along the foot, heel to toe. Every ring runs along the ground
+under the foot, up the sole's edge (standing ``WELT`` out from the upper), then over the foot as
+a rounded arch; the rings' ends are capped. The opening the foot goes in (and a sandal's gaps
+between straps) is cut along a level set (``topology.cut``), so the top line is a smooth curve.
+uv: u along the foot, v round the ring, the sole in ``v < SOLE_V`` and the upper above, so one
+texture holds both. The body stands on the sole: ``LayeredHuman`` lifts it by the sole's height.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from synmitsuba.body.textures import GarmentTextureParams, grid_noise, lab_to_linear_rgb
+from synmitsuba.body.topology import cut
+
+STATIONS = 30          # rings along the shoe
+ARCH = 24              # points of a ring's arch over the foot
+WELT = 0.003           # metres the sole stands out from the upper
+SOLE_V = 0.25          # the sole's share of v; the upper starts at UPPER_V (a crisp colour edge)
+UPPER_V = 0.3
+CAP = 0.035            # metres over which the toe and the heel round off in plan
+BACK = 0.006           # metres the heel counter reaches behind the heel
+ALLOWANCE = 0.004      # metres an upper keeps from the foot with no ease
+
+
+@dataclass(frozen=True)
+class ShoeStyle:
+    """What a shoe kind looks like. Heights are metres over the insole (the top of the sole);
+    ``GarmentParams.length`` picks the collar (and a boot's shaft) within its range, and
+    ``thickness`` is the sole's height, which the body stands on."""
+
+    collar: tuple[float, float]     # the top line's height at the heel
+    throat: float                   # share of the foot's length (from the heel) where the closed vamp starts
+    toe: float                      # metres the toe box reaches past the toes
+    point: float                    # the toe's plan shape: 2 round, > 2 square, < 2 pointed
+    laces: bool = False
+    shaft: tuple[float, float] = (0.0, 0.0)  # boots: the shaft's top over the insole
+    straps: tuple[float, ...] = ()  # sandals: straps across the foot (shares of its length); nothing else covers it
+    uppers: tuple = ()              # LAB colours the upper takes
+    soles: tuple = ()               # and the sole
+    roughness: tuple[float, float] = (0.6, 0.45)  # upper, sole
+
+
+BLACK, WHITE, GREY, NAVY = [12, 0, 0], [93, 0, 2], [55, 0, 0], [22, 5, -25]
+BROWN, TAN, OXBLOOD, GUM = [28, 10, 18], [55, 12, 30], [25, 28, 12], [52, 14, 38]
+SHOE_STYLES: dict[str, ShoeStyle] = {
+    "sneakers": ShoeStyle((0.055, 0.075), 0.42, 0.015, 2.2, laces=True,
+                          uppers=(WHITE, WHITE, BLACK, GREY, NAVY, [45, 40, 30], [60, -30, 20], [40, 10, -45]),
+                          soles=(WHITE, WHITE, [88, 2, 10], GUM, BLACK), roughness=(0.75, 0.6)),
+    "boots": ShoeStyle((0.075, 0.09), 0.45, 0.018, 2.4, laces=True, shaft=(0.12, 0.24),
+                       uppers=(BLACK, BROWN, TAN, [35, 8, 20], GREY), soles=(BLACK, BROWN, [30, 4, 8]),
+                       roughness=(0.55, 0.7)),
+    "dress_shoes": ShoeStyle((0.035, 0.05), 0.5, 0.028, 1.7, laces=True,
+                             uppers=(BLACK, BLACK, BROWN, OXBLOOD, TAN), soles=(BLACK, BROWN, [20, 3, 6]),
+                             roughness=(0.32, 0.5)),
+    "sandals": ShoeStyle((0.012, 0.02), 0.35, 0.008, 2.0, straps=(0.6, 0.8),
+                         uppers=(BROWN, TAN, BLACK, [70, 8, 25]), soles=(TAN, BROWN, BLACK, [80, 4, 14]),
+                         roughness=(0.6, 0.8)),
+}
+
+
+def _sections(points: np.ndarray, z: np.ndarray, sole: float, cap_y: np.ndarray, ends: tuple):
+    """Half-width, centre x and top y of the foot at each ``z``, from vertices within 1 cm
+    (under the station's ``cap_y``: behind the throat, the leg above the collar is not the
+    foot), smoothed along the foot.
+    Past ``ends`` (where the toe box and the heel counter round off) a station takes the
+    section at that end: the toes' uneven lengths would pull the tip sideways."""
+    zz = np.clip(z, *ends)
+    out = []
+    for zk, cap in zip(zz, cap_y):
+        s = points[(np.abs(points[:, 2] - zk) < 0.01) & (points[:, 1] < cap)]
+        lo, hi = s[:, 0].min(), s[:, 0].max()
+        out.append(((hi - lo) / 2, (hi + lo) / 2, s[:, 1].max()))
+    half, centre, top = (np.convolve(np.pad(c, 1, mode="edge"), np.ones(3) / 3, "valid") for c in np.array(out).T)
+    return half, centre, np.maximum(top, sole + 0.02)
+
+
+def _ring(half: float, centre: float, top: float, sole: float, welt: float = WELT) -> tuple[np.ndarray, np.ndarray]:
+    """One ring (x, y) and its v: the sole along the ground and up its edges, the upper as a
+    rounded arch over the foot from the sole's edge (the colours change across the welt's
+    ledge). The last point is the first again with the upper's v: the ring's uv seam."""
+    w = half + welt
+    bottom = np.linspace(-1, 1, 7)
+    # +x wall top, down, along the ground, up the -x wall
+    sole_pts = [(centre + w, sole), (centre + w, sole * 0.5), *[(centre + w * b, 0.0) for b in bottom[::-1]],
+                (centre - w, sole * 0.5), (centre - w, sole)]
+    a = np.linspace(np.pi, 0.0, ARCH)  # -x side, over the top, to the +x side
+    c, s = np.cos(a), np.sin(a)
+    e = 2 / 2.6  # a squarish arch: a toe box, not a tube
+    arch = np.column_stack([centre + half * np.sign(c) * np.abs(c) ** e, sole + (top - sole) * np.abs(s) ** e])
+    xy = np.concatenate([np.array(sole_pts), [(centre - half, sole)], arch[1:-1], [(centre + half, sole)],
+                         [sole_pts[0]]])
+    n_sole = len(sole_pts)
+    v = np.concatenate([np.linspace(0, SOLE_V, n_sole), np.linspace(UPPER_V, 1.0, len(xy) - n_sole)])
+    return xy, v
+
+
+def _plan(z: np.ndarray, heel: float, toes: float, toe: float, point: float) -> np.ndarray:
+    """Share of the foot's half-width the shoe keeps at each ``z``: 1 along the foot, rounding
+    off to 0 at the heel counter's back and at the toe box's tip (superellipse, ``point``)."""
+    front = (toes - CAP * 0.6, toes + toe)
+    back = (heel + CAP * 0.5, heel - BACK)
+    t_f = np.clip((z - front[0]) / (front[1] - front[0]), 0, 1)
+    t_b = np.clip((back[0] - z) / (back[0] - back[1]), 0, 1)
+    return np.minimum((1 - t_f ** point) ** (1 / point), (1 - t_b ** 2.2) ** (1 / 2.2))
+
+
+def _grid(rings: list, vs: np.ndarray, u: np.ndarray):
+    """Faces between consecutive rings (each closed through its seam), fans capping both ends:
+    (vertices, faces, uv)."""
+    k, m = len(rings), len(rings[0])
+    v = np.concatenate(rings)
+    i, j = np.meshgrid(np.arange(k - 1), np.arange(m - 1), indexing="ij")
+    a = (i * m + j).reshape(-1)
+    f = np.concatenate([np.stack([a, a + m, a + 1], 1), np.stack([a + 1, a + m, a + m + 1], 1)])  # facing out
+    uv = np.column_stack([np.repeat(u, m), np.tile(vs, k)])
+    caps: list[tuple[np.ndarray, np.ndarray]] = []
+    for r, flip in ((0, False), (k - 1, True)):
+        centre = len(v) + len(caps)
+        ids = r * m + np.arange(m - 1)
+        fan = np.stack([np.full(m - 1, centre), ids, np.roll(ids, -1)], 1)
+        caps.append((rings[r][:-1].mean(0), fan[:, [0, 2, 1]] if flip else fan))
+    v = np.concatenate([v, [c[0] for c in caps]])
+    f = np.concatenate([f, *[c[1] for c in caps]])
+    uv = np.concatenate([uv, [[u[0], 0.1], [u[-1], 0.1]]])
+    return v, f, uv
+
+
+def foot_points(body, regions, side: float) -> np.ndarray:
+    """The rest body's foot and its leg up to 32 cm on one side (+1 left, -1 right): vertices,
+    and points over its faces (the shin's vertices lie rings apart, and a ring fitted to them
+    alone cuts the skin between)."""
+    v = body.vertices
+    leg = np.isin(regions.group, ["foot", "lowerleg"]) & (np.sign(v[:, 0]) == side)
+    keep = leg & ((regions.group == "foot") | (v[:, 1] < v[:, 1].min() + 0.32))
+    tri = v[body.faces[keep[body.faces].all(1)]]
+    bary = np.array([[2, 1, 1], [1, 2, 1], [1, 1, 2], [1, 1, 0], [0, 1, 1], [1, 0, 1]], float)
+    bary /= bary.sum(1, keepdims=True)
+    return np.concatenate([v[keep], np.einsum("bk,fkd->fbd", bary, tri).reshape(-1, 3)])
+
+
+def shoe_mesh(points: np.ndarray, style: ShoeStyle, sole: float, allowance: float, length: float):
+    """One shoe round ``points`` (a foot from ``foot_points``): (vertices, faces, uv)."""
+    foot = points[points[:, 1] < sole + 0.16]
+    heel, toes = foot[:, 2].min(), foot[:, 2].max()
+    collar = sole + style.collar[0] + (style.collar[1] - style.collar[0]) * length
+    s = np.linspace(0, 1, STATIONS)
+    u = (1 - np.cos(np.pi * s)) / 2  # denser at the toe and the heel, where the shoe turns
+    z = heel - BACK + u * (toes + style.toe - heel + BACK)
+    cap = np.where(z < heel + style.throat * (toes - heel), collar + 0.03, np.inf)
+    half, centre, top = _sections(foot, z, sole, cap, (heel + CAP * 0.5, toes - CAP * 0.6))
+    plan = _plan(z, heel, toes, style.toe, style.point)
+    tip = np.clip((z - (toes - CAP)) / (CAP + style.toe), 0, 1)
+    low = sole + 0.022
+    top = np.where(top > low, top + (low - top) * tip ** 1.5, top)  # the toe box lowers to its tip
+    rings = []
+    for k in range(STATIONS):
+        # the welt narrows with the plan at the tip and the heel: the end caps close to a sliver
+        xy, vs = _ring(max((half[k] + allowance) * plan[k], 2e-4), centre[k], top[k] + allowance, sole,
+                       WELT * min(1.0, 4 * plan[k]))
+        rings.append(np.column_stack([xy, np.full(len(xy), z[k])]))
+    v, f, uv = _grid(rings, vs, u)  # every ring has the same v
+    phi = _opening(v, uv, style, sole, collar, (heel, toes))
+    f, v, uv = cut(f, phi, v, uv)
+    return v, f, uv
+
+
+def _opening(v: np.ndarray, uv: np.ndarray, style: ShoeStyle, sole: float, collar: float, ends) -> np.ndarray:
+    """Level set of what the shoe keeps (>= 0): the sole, and the upper under the collar
+    behind the throat and (sandals) along the straps; a boot's collar is its shaft's job."""
+    heel, toes = ends
+    along = (v[:, 2] - heel) / (toes - heel)
+    y = v[:, 1]
+    if style.straps:
+        straps = np.max([0.011 - np.abs(along - s) * (toes - heel) for s in style.straps], axis=0)
+        rim = np.minimum(collar - y, (0.35 - along) * (toes - heel))  # a low cup round the heel
+        keep = np.maximum(straps, rim)
+    else:
+        dip = collar - 0.012 * np.clip(along / style.throat, 0, 1)  # the top line falls a little to the throat
+        keep = np.maximum(dip - y, (along - style.throat) * (toes - heel))
+    return np.where(uv[:, 1] < UPPER_V, 1.0, keep)
+
+
+def shaft_mesh(points: np.ndarray, sole: float, top: float, allowance: float, n: int = 32):
+    """A boot's shaft: a tube round the ankle and shin from the shoe's collar up to ``top``
+    (metres over the ground), the leg's reach in each direction plus ``allowance``; uv continues
+    the upper's. (vertices, faces, uv); open at both ends."""
+    heights = np.linspace(sole + 0.05, top, 10)
+    heel, toes = points[:, 2].min(), points[:, 2].max()
+    instep = (points[:, 2] > heel + 0.55 * (toes - heel)) & (points[:, 1] < sole + 0.12)
+    leg = points[(points[:, 1] > sole + 0.04) & ~instep]
+    ang = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    d = np.stack([np.sin(ang), np.cos(ang)], 1)
+    rings = []
+    for h in heights:
+        band = leg[np.abs(leg[:, 1] - h) < 0.015][:, [0, 2]]
+        c = (band.max(0) + band.min(0)) / 2
+        reach = (band - c) @ d.T
+        tuck = 0.004 * (h < sole + 0.08)  # the lowest rings go inside the shoe's collar: a seam, not a step
+        r = reach.max(0)
+        r = np.maximum(r, np.convolve(np.pad(r, 2, mode="wrap"), np.ones(5) / 5, "valid")) + allowance - tuck
+        rings.append(np.column_stack([c[0] + r * d[:, 0], np.full(n, h), c[1] + r * d[:, 1]]))
+    m = len(ang) + 1  # a seam: the first point repeated with v = 1
+    v = np.concatenate([np.vstack([r, r[:1]]) for r in rings])
+    i, j = np.meshgrid(np.arange(len(heights) - 1), np.arange(m - 1), indexing="ij")
+    a = (i * m + j).reshape(-1)
+    f = np.concatenate([np.stack([a, a + 1, a + m], 1), np.stack([a + 1, a + m + 1, a + m], 1)])  # facing out
+    uv = np.column_stack([np.repeat(np.linspace(0, 0.4, len(heights)), m),
+                          np.tile(np.linspace(UPPER_V, 1.0, m), len(heights))])
+    return v, f, uv
+
+
+def shoe_colours(style: ShoeStyle, seed: int) -> tuple:
+    """(upper, sole, laces) LAB colours of a pair, drawn from the style's palettes by ``seed``."""
+    rng = np.random.default_rng([seed, 11])
+    upper = list(style.uppers[int(rng.integers(len(style.uppers)))])
+    sole = list(style.soles[int(rng.integers(len(style.soles)))])
+    laces = upper if rng.random() < 0.5 else (WHITE if upper[0] < 50 else BLACK)
+    return upper, sole, list(laces)
+
+
+def shoe_texture(style: ShoeStyle, p: GarmentTextureParams, size: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """Albedo (linear RGB) and roughness over the shoe's uv square: the sole's colour under
+    ``SOLE_V``, the upper's (``p.base_lab``) above, with faint mottling, laces crossing the throat."""
+    _, sole, laces = shoe_colours(style, p.seed)
+    upper = p.base_lab
+    v = 1 - (np.arange(size) + 0.5) / size            # row 0 is v = 1
+    u = (np.arange(size) + 0.5) / size
+    V, U = np.meshgrid(v, u, indexing="ij")
+    noise = grid_noise(size, 6.0, p.seed) - 0.5
+    albedo = np.where((V < (SOLE_V + UPPER_V) / 2)[..., None], lab_to_linear_rgb(sole),
+                      lab_to_linear_rgb(upper))
+    albedo = albedo * (1 + 0.12 * noise[..., None])
+    rough = np.where(V < (SOLE_V + UPPER_V) / 2, style.roughness[1], style.roughness[0]) + 0.08 * noise
+    if style.laces:  # over the throat (u from the throat forward, v over the arch's top): a darker
+        # tongue between two eyestays' edges, laces crossing it
+        mid = (UPPER_V + 1) / 2
+        along = (U > style.throat) & (U < style.throat + 0.22)
+        off = np.abs(V - mid)
+        albedo = np.where((along & (off < 0.07))[..., None], albedo * 0.7, albedo)
+        albedo = np.where((along & (off >= 0.07) & (off < 0.082))[..., None], albedo * 0.45, albedo)
+        bars = along & (off < 0.075) & (np.abs(((U - style.throat) / 0.035) % 1 - 0.5) < 0.16)
+        albedo = np.where(bars[..., None], lab_to_linear_rgb(laces), albedo)
+    return np.clip(albedo, 0, 1).astype(np.float32), np.clip(rough, 0.05, 1).astype(np.float32)
+
+
+
+def sample_shoe_texture(style: ShoeStyle, rng: np.random.Generator) -> GarmentTextureParams:
+    """A pair's colours: the upper's from the style's palette as ``base_lab`` (the sole's and
+    the laces' follow from ``seed``), plain."""
+    seed = int(rng.integers(0, 2 ** 31))
+    upper = shoe_colours(style, seed)[0]
+    return GarmentTextureParams(base_lab=[float(x) for x in upper], seed=seed)
+
+
+def shoe_material(style: ShoeStyle, p: GarmentTextureParams, size: int = 256):
+    """The pair's principled material: ``shoe_texture``'s albedo and roughness."""
+    from synmitsuba.scene.materials import Material
+    albedo, rough = shoe_texture(style, p, size)
+    return Material(texture=albedo, kind="principled", roughness_map=rough, specular=0.4)

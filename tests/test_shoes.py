@@ -1,0 +1,155 @@
+"""Shoes (body/shoes.py): soles on the ground, the foot inside the shoe at rest and in motion,
+styles sampled with the outfit, the sole's and the upper's colours where uv puts them."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from reference import point_triangle_distances, winding_numbers
+
+import synmitsuba as sm
+from synmitsuba.body.garments import FOOTWEAR, GARMENTS
+from synmitsuba.body.shoes import BACK, SHOE_STYLES, SOLE_V, UPPER_V
+
+STYLES = tuple(SHOE_STYLES)
+
+
+def _subject(kind: str, seed: int = 4):
+    recipe = sm.sample_subject(np.random.default_rng(seed), {"outfit": ["tshirt", "shorts", kind], "jacket": False,
+                                                             "accessories": [], "texture_size": 64})
+    return sm.build_subject(recipe)
+
+
+@pytest.fixture(scope="module", params=STYLES)
+def shod(request):
+    return request.param, _subject(request.param)
+
+
+def _shoe(human):
+    return next(p for p in human.parts if p.name in GARMENTS and GARMENTS[p.name].footwear)
+
+
+def _foot(human, side: float):
+    """The rest body's foot vertices on one side, from the body's own skinning weights (not the
+    garment code's regions): the vertices the foot and toe bones move most."""
+    sk, body = human.skeleton, human.body
+    bones = np.array([("foot" in n or "toe" in n) for n in sk.names])
+    mask = bones[body.weights.argmax(1)] & (np.sign(body.vertices[:, 0]) == side)
+    return np.flatnonzero(mask)
+
+
+def test_the_body_stands_on_the_sole_and_the_sole_on_the_ground(shod):
+    kind, h = shod
+    g = next(m for m in h.garments if m.params.kind == kind)
+    shoe = _shoe(h)
+    assert shoe.rest[:, 1].min() == pytest.approx(0.0, abs=1e-9)
+    assert h.body.vertices[:, 1].min() == pytest.approx(g.params.thickness, abs=2e-3)
+    sole = shoe.uv[:, 1] < (SOLE_V + UPPER_V) / 2
+    flat = shoe.rest[sole & (shoe.rest[:, 1] < 1e-9)]
+    for side in (1.0, -1.0):  # the footprint spans the foot, from behind the heel to past the toes
+        foot = h.body.vertices[_foot(h, side)]
+        print_ = flat[np.sign(flat[:, 0]) == side]
+        assert print_[:, 2].min() == pytest.approx(foot[:, 2].min() - BACK, abs=3e-3)
+        assert print_[:, 2].max() == pytest.approx(foot[:, 2].max() + SHOE_STYLES[kind].toe, abs=3e-3)
+
+
+def test_at_rest_every_shoe_vertex_is_outside_the_foot_and_the_forefoot_inside_the_shoe(shod):
+    kind, h = shod
+    shoe = _shoe(h)
+    body = h.body
+    for side in (1.0, -1.0):
+        ids = _foot(h, side)
+        near = np.isin(body.faces, ids).any(1)
+        pts = shoe.rest[np.sign(shoe.rest[:, 0]) == side]
+        tri = body.vertices[body.faces[near]]
+        d = point_triangle_distances(pts[pts[:, 1] < body.vertices[ids, 1].max()], tri)
+        assert d.min(1).min() > 1e-3
+        if SHOE_STYLES[kind].straps:
+            continue  # a sandal leaves the foot out between its straps
+        foot = body.vertices[ids]
+        front = foot[foot[:, 2] > foot[:, 2].min() + 0.6 * np.ptp(foot[:, 2])]
+        assert winding_numbers(shoe.rest, shoe.faces, front).min() > 0.5
+
+
+@pytest.mark.parametrize("motion", ["walk", "run"])
+def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion):
+    """Placed as composition places a clip (its lowest point over the clip on the ground), the
+    lowest sole point is never under the ground; in a walk (one foot always planted) it is on
+    it (under 3 mm) in most frames and within 1.5 cm in all (the walk plants the lowest joint,
+    and a rigid sole rocks on its heel or toe as the foot rolls); the forefoot never leaves
+    its shoe."""
+    from synmitsuba.compose.subjects import clip_bounds
+    h = _subject("sneakers")
+    clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h.skeleton)
+    _, _, lift = clip_bounds(h, clip)
+    shoe = _shoe(h)
+    front = [ids[h.body.vertices[ids, 2] > h.body.vertices[ids, 2].min() + 0.6 * np.ptp(h.body.vertices[ids, 2])]
+             for ids in (_foot(h, 1.0), _foot(h, -1.0))]
+    rows = np.isin(h.split.source, np.concatenate(front))  # the body layer is the seam-split render mesh
+    lowest = []
+    for f in range(clip.n_frames):
+        layers = {lay.name: lay for lay in h.pose(*clip.frame(f))}
+        v = layers[shoe.name].vertices
+        lowest.append(v[:, 1].min() + lift)
+        inside = winding_numbers(v, layers[shoe.name].faces, layers["body"].vertices[rows])
+        assert inside.min() > 0.5, (f, inside.min())
+    lowest = np.array(lowest)
+    assert lowest.min() >= -1e-9
+    if motion == "walk":
+        assert np.median(lowest) < 0.003 and lowest.max() < 0.015, lowest
+
+
+def test_styles_are_drawn_with_the_outfit_and_boots_never_under_trousers():
+    counts = dict.fromkeys(STYLES, 0)
+    for seed in range(300):
+        r = sm.sample_subject(np.random.default_rng(seed))
+        kinds = [g.kind for g in r.garments]
+        shoes = [k for k in kinds if k in GARMENTS and GARMENTS[k].footwear]
+        assert len(shoes) <= 1 and not ("boots" in kinds and "trousers" in kinds)
+        for k in shoes:
+            counts[k] += 1
+        assert sm.SubjectRecipe.from_json(r.to_json()).to_json() == r.to_json()
+    total = sum(counts.values())
+    assert 0.75 * 300 < total < 0.95 * 300  # 85 % shod
+    for k, share in FOOTWEAR.items():
+        assert counts[k] > 0.3 * share * total, counts
+
+
+def test_a_recipe_with_the_old_shoes_kind_still_builds_its_hull_shoes():
+    recipe = sm.sample_subject(np.random.default_rng(4), {"outfit": ["tshirt", "shorts", "shoes"], "jacket": False,
+                                                          "texture_size": 64})
+    d = recipe.to_dict()
+    d["garments"][-1]["kind"] = "shoes"
+    d["garments"][-1]["thickness"] = 0.005
+    h = sm.build_subject(sm.SubjectRecipe.from_dict(d))
+    assert _shoe(h).name == "shoes" and h.body.vertices[:, 1].min() > 0.005
+
+
+def test_the_sole_and_the_upper_render_in_their_own_colours():
+    """A side view of white sneakers on a dark sole: a point half-way up the sole renders dark
+    and a point on the upper's side renders light, both in the shoes' layer."""
+    style = SHOE_STYLES["sneakers"]
+    from synmitsuba.body.shoes import shoe_colours
+    seed = next(s for s in range(1000) if shoe_colours(style, s)[1][0] < 20)  # a black sole
+    recipe = sm.sample_subject(np.random.default_rng(4), {"outfit": ["tshirt", "shorts", "sneakers"], "jacket": False,
+                                                          "accessories": [], "texture_size": 64})
+    d = recipe.to_dict()
+    d["garments"][-1]["texture"].update(base_lab=[93.0, 0.0, 2.0], seed=seed)
+    h = sm.build_subject(sm.SubjectRecipe.from_dict(d))
+    g = next(m for m in h.garments if m.params.kind == "sneakers")
+    from synmitsuba.compose.stage import preview_stage
+    sm.set_variant()
+    scene = preview_stage()
+    h.add_to(scene, instance=1)
+    foot = h.body.vertices[_foot(h, 1.0)]
+    mid_z = foot[:, 2].mean()
+    side_x = _shoe(h).rest[:, 0].max()
+    cam = sm.Camera.look_at(eye=(side_x + 0.6, 0.04, mid_z), target=(side_x, 0.04, mid_z), fov_y_deg=20,
+                            width=96, height=64)
+    sample = sm.render(scene, cam, spp=16, seed=0)
+    sole_px, upper_px = (np.floor(cam.project(np.array([[side_x, y, mid_z]]))[0][0]).astype(int)
+                         for y in (g.params.thickness / 2, g.params.thickness + 0.025))
+    lum = sample.rgb[..., :3].mean(-1)
+    layer = sample.layer
+    for px in (sole_px, upper_px):
+        assert layer[px[1], px[0]] == int(sm.Layer.SHOES)
+    assert lum[upper_px[1], upper_px[0]] > 4 * lum[sole_px[1], sole_px[0]]
