@@ -181,7 +181,8 @@ def test_a_view_that_sees_nothing_warns_on_one_line(sm, scene_dir, capsys):
 
 
 def test_no_third_party_banner_and_clean_stdout(tmp_path):
-    r = _run("subject", "--sheet", "1", "--res", "24x32", "--spp", "1", "--closeup", "--out", str(tmp_path / "s.png"))
+    r = _run("subject", "--sheet", "1", "--res", "24x32", "--spp", "1", "--closeup", "mouth", "--out",
+             str(tmp_path / "s.png"))
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == str(tmp_path / "s.png")
     assert "Warp" not in r.stderr and "CUDA" not in r.stderr, r.stderr

@@ -23,6 +23,7 @@ from synmitsuba.body.hand_points import HandPoints, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
+from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.skin_detail import face_weights, pore_repeat
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
@@ -140,6 +141,7 @@ class LayeredHuman:
         for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
             part.inner = clothes[k] and any(clothes[k + 1:])
         self._build_eyes()
+        self._build_mouth()
         self._build_brows_and_lashes()
         self._posed: dict = {}  # the last few pose() calls: a frame is posed for the scene, labels and flow
         self._build_head_and_hair()
@@ -199,6 +201,23 @@ class LayeredHuman:
         weights = np.zeros((len(v), len(self.skeleton)))
         weights[np.arange(len(v)), np.asarray(self.eyes.bones)[side]] = 1.0
         self.parts.append(_Part("eyes", int(Layer.EYES), eye_material(self.recipe.eyes), v, f, uv, weights))
+
+    def _build_mouth(self) -> None:
+        """Teeth and gums (``body.mouth``) as two parts on the teeth layer, rigid to the head;
+        the lower rows (``_lower``) follow the jaw units first."""
+        body = self.body
+        self.jaw = fit_jaw(body.vertices)
+        upper, lower = jaws(fit_helper(body.vertices))
+        teeth, gums = mouth_materials(float(self.recipe.phenotypes.get("age", 0.5)), self.recipe.eyes.seed)
+        head = self.skeleton.index("head")
+        self._lower: dict[str, np.ndarray] = {}
+        for name, material, make in (("teeth", teeth, "crowns"), ("gums", gums, "gums")):
+            (vu, fu), (vl, fl) = getattr(upper, make)(), getattr(lower, make)()
+            v, f = np.concatenate([vu, vl]), np.concatenate([fu, fl + len(vu)])
+            weights = np.zeros((len(v), len(self.skeleton)))
+            weights[:, head] = 1.0
+            self._lower[name] = np.arange(len(vu), len(v))
+            self.parts.append(_Part(name, int(Layer.TEETH), material, v, f, None, weights))
 
     def _build_brows_and_lashes(self) -> None:
         """Brow hairs and lashes round both eyes (``body.brows``), each strand skinned rigidly
@@ -304,8 +323,9 @@ class LayeredHuman:
         if key in self._posed:  # same arrays, new records: nothing downstream writes into them
             return [dataclasses.replace(layer) for layer in self._posed[key]]
         moved = self._face_moved(face)
-        out = [PosedLayer(p.name, p.layer, p.material, skin(p.rest if k else moved[0], p.skinning_weights, T), p.faces,
-                          p.uv) for k, p in enumerate(self.parts)]
+        out = [PosedLayer(p.name, p.layer, p.material, skin(moved[3].get(p.name, p.rest) if k else moved[0],
+                                                            p.skinning_weights, T), p.faces, p.uv)
+               for k, p in enumerate(self.parts)]
         for layer in out:
             if layer.name in garments:
                 layer.vertices = np.asarray(garments[layer.name], dtype=np.float64)
@@ -328,14 +348,19 @@ class LayeredHuman:
         self._posed[key] = out
         return [dataclasses.replace(layer) for layer in out]
 
-    def _face_moved(self, face: np.ndarray | None) -> tuple[np.ndarray, dict, np.ndarray]:
-        """The body part's rest vertices, the brow and lash strands and the hair's strands
-        moved by ``face``: each strand with the skin vertex at its root (a beard opens with the
-        jaw)."""
+    def _face_moved(self, face: np.ndarray | None) -> tuple[np.ndarray, dict, np.ndarray, dict]:
+        """The body part's rest vertices, the brow and lash strands, the hair's strands and the
+        mouth's parts (by name) moved by ``face``: each strand with the skin vertex at its root
+        (a beard opens with the jaw), the lower teeth and gums with the jaw (``JawMotion``)."""
         body, hair = self.parts[0].rest, self.hair.points
         strands = {name: pts for name, (pts, *_rest) in self.face_hair.items()}
         if face is None:
-            return body, strands, hair
+            return body, strands, hair, {}
+        mouth = {}
+        for p in self.parts:
+            if p.name in self._lower:
+                mouth[p.name] = p.rest.copy()
+                mouth[p.name][self._lower[p.name]] = self.jaw.moved(p.rest[self._lower[p.name]], face)
         units, (rows, cols), roots = face_units(), self._face_rows, self._face_roots
         d = units.displacement(face)
         body = body.copy()
@@ -348,7 +373,7 @@ class LayeredHuman:
         if len(at):
             hair = hair.copy()
             hair[at] += d[which][:, None, :]
-        return body, strands, hair
+        return body, strands, hair, mouth
 
     @functools.cached_property
     def _face_hair_roots(self) -> tuple[np.ndarray, np.ndarray]:

@@ -6,16 +6,18 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from synmitsuba.cli.args import add_variant_option, natural_int, output_dir, output_file, positive_int, resolution
 
 # layer id -> preview colour (background, body, top, bottom, dress, shoes, hair, beard, accessory, object, ground,
-# eyes)
+# eyes, teeth)
 LAYER_COLOURS = np.array([[0, 0, 0], [230, 190, 160], [200, 40, 40], [40, 80, 200], [180, 60, 180], [40, 40, 40],
                           [120, 80, 30], [90, 60, 20], [40, 200, 200], [200, 200, 40], [110, 110, 110],
-                          [250, 250, 250]], np.uint8)
+                          [250, 250, 250], [250, 120, 200]], np.uint8)
 
 
 def _camera(human, angle_deg: float, w: int, h: int):
@@ -50,12 +52,47 @@ def _feet_camera(human, w: int, h: int):
                           fov_y_deg=35, width=w, height=h)
 
 
-CLOSEUPS = {"head": _closeup_camera, "feet": _feet_camera}
+def _mouth_camera(human, w: int, h: int):
+    """Nose to chin from 20 deg to the right, level with the mouth."""
+    from synmitsuba.scene.camera import Camera
+    kp = human.keypoints()
+    target = kp[0] + [0.0, -0.04, 0.0]
+    a = np.radians(20.0)
+    return Camera.look_at(eye=tuple(target + 0.26 * np.array([np.sin(a), 0.05, np.cos(a)])), target=tuple(target),
+                          fov_y_deg=25, width=w, height=h)
 
 
-def _subject_in_stage(seed: int, cloth: str = "skinned"):
-    """The sampled subject in the rest pose on a preview stage; with ``cloth`` "simulated" its
-    skirt or dress settled by the cloth stage (the same subject as skinned: the mode draws nothing)."""
+# what the mouth close-ups show, subject by subject in turn: ARKit unit weights
+MOUTHS = ({"jawOpen": 0.6}, {"mouthSmileLeft": 0.9, "mouthSmileRight": 0.9, "jawOpen": 0.15},
+          {"jawOpen": 0.3, "mouthFunnel": 0.3}, {"jawOpen": 0.8, "browInnerUp": 0.6},
+          {"mouthSmileLeft": 0.7, "mouthSmileRight": 0.7, "mouthUpperUpLeft": 0.5, "mouthUpperUpRight": 0.5},
+          {"jawOpen": 0.35, "mouthStretchLeft": 0.3, "mouthStretchRight": 0.3})
+
+
+def _mouth_face(k: int) -> np.ndarray:
+    from synmitsuba.body.expressions import FACE_UNITS
+    w = np.zeros(len(FACE_UNITS))
+    for name, x in MOUTHS[k % len(MOUTHS)].items():
+        w[FACE_UNITS.index(name)] = x
+    return w
+
+
+@dataclass(frozen=True)
+class Closeup:
+    """A sheet's close-up: its camera for a built subject and size, and the face it wears
+    (ARKit weights for the k-th subject; None: at rest)."""
+
+    camera: Callable
+    face: Callable[[int], np.ndarray | None] = lambda k: None
+
+
+CLOSEUPS = {"head": Closeup(_closeup_camera), "feet": Closeup(_feet_camera), "mouth": Closeup(_mouth_camera, _mouth_face)}
+
+
+def _subject_in_stage(seed: int, cloth: str = "skinned", face=None):
+    """The sampled subject in the rest pose on a preview stage, wearing ``face`` (ARKit weights
+    or None); with ``cloth`` "simulated" its skirt or dress settled by the cloth stage (the same
+    subject as skinned: the mode draws nothing)."""
     from synmitsuba.body.recipe import sample_subject
     from synmitsuba.body.subject import build_subject
     from synmitsuba.cloth import simulate_cloth
@@ -67,7 +104,7 @@ def _subject_in_stage(seed: int, cloth: str = "skinned"):
     J = len(human.skeleton)
     rest = Motion(human.skeleton, np.broadcast_to(np.eye(3), (1, J, 3, 3)), np.zeros((1, 3)), 30.0)
     track = simulate_cloth(human, rest) if cloth == "simulated" else None
-    human.add_to(scene, instance=1, garments=None if track is None else track.at(0))
+    human.add_to(scene, instance=1, face=face, garments=None if track is None else track.at(0))
     return recipe, human, scene
 
 
@@ -94,9 +131,10 @@ def sheet(args) -> int:
     output_file(path)
     sm.set_variant(args.variant)
     images = []
+    view = CLOSEUPS[args.closeup] if args.closeup else None
     for k in range(args.sheet):
-        _, human, scene = _subject_in_stage(args.seed + k, args.cloth)
-        cam = CLOSEUPS[args.closeup](human, *args.res) if args.closeup else _camera(human, 25.0, *args.res)
+        _, human, scene = _subject_in_stage(args.seed + k, args.cloth, view.face(k) if view else None)
+        cam = view.camera(human, *args.res) if view else _camera(human, 25.0, *args.res)
         images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
     print(sm.write_png(path, sm.contact_sheet(images, columns=min(6 if args.closeup else 8, args.sheet))))
     return 0
@@ -115,7 +153,8 @@ def add_parser(sub) -> None:
                    "instead of a turntable")
     p.add_argument("--closeup", nargs="?", const="head", choices=tuple(CLOSEUPS), default=None,
                    help="with --sheet: head and shoulders (default: the whole body; docs/closeups.png is --sheet 12 "
-                   "--closeup --res 512x512 --spp 64), or with 'feet' both feet (docs/shoes.png)")
+                   "--closeup --res 512x512 --spp 64), with 'feet' both feet (docs/shoes.png), with 'mouth' the "
+                   "mouth open, smiling or speaking (docs/mouths.png)")
     p.add_argument("--cloth", choices=("skinned", "simulated"), default="skinned",
                    help="skirts and dresses skinned, or settled by the cloth stage (synmitsuba.cloth)")
     add_variant_option(p)

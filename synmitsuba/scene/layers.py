@@ -15,3 +15,4 @@ class Layer(IntEnum):
     OBJECT = 9      # props and scene objects
     GROUND = 10
     EYES = 11       # eyeballs (sclera, iris, pupil, cornea)
+    TEETH = 12      # teeth and gums
