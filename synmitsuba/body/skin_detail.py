@@ -47,3 +47,40 @@ def face_weights(vertices: np.ndarray, eyes: np.ndarray, nose: np.ndarray) -> di
         d = np.exp(-((x - c[0]) / 0.013) ** 2 - ((y - (c[1] - 0.015)) / 0.006) ** 2)
         under = np.maximum(under, d * (z > c[2] - 0.004))
     return {"tzone": tzone, "under_eye": under}
+
+
+THIN_SKIN = (0.004, 0.010)  # metres: skin thinner than the first passes light fully, thicker than the second none
+THIN_PLACES = (0.04, 0.025)  # metres round each ear keypoint, round the nose keypoint, where thin skin is lit from both sides
+
+
+def skin_thickness(vertices: np.ndarray, normals: np.ndarray, keep: np.ndarray, reach: float = THIN_SKIN[1],
+                   k: int = 96) -> np.ndarray:
+    """Per vertex, how thin the skin is there: the distance to the nearest of its ``k`` nearest
+    ``keep`` vertices (within ``reach``) on the other side, behind it and facing the other way
+    (the far side of an ear's flap, a nostril's wing); inf where none is."""
+    from scipy.spatial import cKDTree
+    ids = np.flatnonzero(keep)
+    out = np.full(len(vertices), np.inf)
+    if len(ids) < 2:
+        return out
+    dist, near = cKDTree(vertices[ids]).query(vertices[ids], k=min(k, len(ids)), distance_upper_bound=reach)
+    found = np.isfinite(dist)
+    nb = ids[np.where(found, near, 0)]
+    n = normals[ids]
+    depth = np.einsum("nkc,nc->nk", vertices[nb] - vertices[ids, None], n)
+    behind = found & (np.einsum("nkc,nc->nk", normals[nb], n) < -0.3) & (depth < -0.0005)
+    out[ids] = np.where(behind, dist, np.inf).min(1)
+    return out
+
+
+def translucency_weights(vertices: np.ndarray, normals: np.ndarray, keep: np.ndarray, ears: np.ndarray,
+                         nose: np.ndarray, hands: np.ndarray) -> np.ndarray:
+    """Per-vertex translucency in [0, 1]: 1 where the skin is under ``THIN_SKIN[0]`` thick, 0
+    over ``THIN_SKIN[1]``, only on the ears, the nose's wings and the hands (``hands`` mask):
+    flaps that light reaches from both sides. Thin skin over a cavity (the cheeks over the
+    mouth) would only pass light into the dark."""
+    places = (np.linalg.norm(vertices[:, None] - ears[None], axis=2).min(1) < THIN_PLACES[0]) | hands
+    places |= np.linalg.norm(vertices - nose, axis=1) < THIN_PLACES[1]
+    depth = skin_thickness(vertices, normals, keep & places)
+    lo, hi = THIN_SKIN
+    return np.clip((hi - depth) / (hi - lo), 0.0, 1.0) * places

