@@ -110,6 +110,7 @@ def test_fit_recovers_a_known_hand_pose_and_expression(models, walker, sm):
     the camera-frame parameters lands on the fitted vertices."""
     import dataclasses
 
+    from synmitsuba.annotate.smplx_fit import pca_hands
     from synmitsuba.annotate.smplx_synthetic import true_pose
     from synmitsuba.body.expressions import FACE_UNITS, face_units
     from synmitsuba.body.smplx_model import load_model
@@ -121,7 +122,7 @@ def test_fit_recovers_a_known_hand_pose_and_expression(models, walker, sm):
     w[[FACE_UNITS.index("jawOpen"), FACE_UNITS.index("mouthSmileLeft"), FACE_UNITS.index("mouthSmileRight")]] = 0.5, 0.7, 0.7
     clip = dataclasses.replace(clip, face=np.tile(w, (clip.n_frames, 1)))
     frames = [3, 4, 5]
-    fit = sm.fit_smplx(human, clip, models, gender="neutral", frames=frames)
+    fit = sm.fit_smplx(human, clip, models, gender="neutral", frames=frames, hand_pca=12)
     truth = true_pose(os.path.join(models, "SMPLX_NEUTRAL.npz"), human.body, clip, frames)
     err = np.degrees(np.linalg.norm(matrix_to_axis_angle(np.swapaxes(truth, -1, -2) @ axis_angle_to_matrix(fit.pose)), axis=-1))
     assert err[:, 25:55].mean() < 5.0 and err[:, 25:55].max() < 15.0, err[:, 25:55].mean(0)
@@ -147,6 +148,33 @@ def test_fit_recovers_a_known_hand_pose_and_expression(models, walker, sm):
     world, _ = _numpy_pose(m, fit.betas, fit.pose[1], fit.transl[1], fit.expression[1])
     in_cam, _ = _numpy_pose(m, p["betas"], full, p["transl"], p["expression"])
     assert np.abs(in_cam - (world @ cam.R.T + cam.t)).max() < 1e-6
+    # the 12-component hand PCA: what it misses is orthogonal to the 12 components (least squares),
+    # read here straight from the file; all 45 components give the fitted hands back
+    with np.load(os.path.join(models, "SMPLX_NEUTRAL.npz")) as data:
+        comps = {s: data[f"hands_components{s}"] for s in "lr"}
+        mean = {s: data[f"hands_mean{s}"] for s in "lr"}
+    assert fit.hand_pca.shape == (3, 2, 12) and p["left_hand_pca"].shape == (12,) and p["fit"]["hand_pca_deg"] > 0
+    for k, s in enumerate("lr"):
+        hand = fit.pose[:, 25 + 15 * k:40 + 15 * k].reshape(3, 45)
+        miss = hand - mean[s] - fit.hand_pca[:, k] @ comps[s][:12]
+        assert np.abs(miss @ comps[s][:12].T).max() < 1e-9 and np.abs(miss).max() > 1e-3
+    coef, deg = pca_hands(fit.pose[:, 25:55].reshape(3, 2, 15, 3), np.stack([comps["l"], comps["r"]]),
+                          np.stack([mean["l"], mean["r"]]), 45)
+    assert deg.max() < 1e-6 and np.allclose(coef[:, 0], (fit.pose[:, 25:40].reshape(3, 45) - mean["l"]) @ comps["l"].T)
+
+
+def test_hand_pca_without_components_in_the_file_is_one_line_before_any_fit(models, tmp_path):
+    """A model file without the hand PCA arrays: asking for ``hand_pca`` names the field, the
+    file and the fix when the options are read, before any work."""
+    from synmitsuba.annotate.smplx_fit import SMPLXOptions
+    with np.load(os.path.join(models, "SMPLX_NEUTRAL.npz")) as data:
+        np.savez(tmp_path / "SMPLX_NEUTRAL.npz", **{k: data[k] for k in data.files if not k.startswith("hands_")})
+    SMPLXOptions.from_dict({"enabled": True, "model_path": models, "gender": "neutral", "hand_pca": 12})
+    with pytest.raises(ConfigError) as err:
+        SMPLXOptions.from_dict({"enabled": True, "model_path": str(tmp_path), "gender": "neutral", "hand_pca": 12})
+    assert err.value.field == "hand_pca" and "hand_pca: 0" in str(err.value)
+    with pytest.raises(ConfigError):
+        SMPLXOptions.from_dict({"enabled": True, "model_path": models, "hand_pca": 46})
 
 
 def test_smpl_fit_and_the_error_flag(models, walker, sm):

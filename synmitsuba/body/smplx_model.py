@@ -97,6 +97,8 @@ class ModelFile:
     weights: np.ndarray         # (V, J)
     parents: np.ndarray         # (J,), -1 for the root
     joint_names: tuple
+    hands_components: np.ndarray | None = None  # (2, 45, 45) left, right: rows are the hand pose components (SMPL-X)
+    hands_mean: np.ndarray | None = None        # (2, 45) left, right mean hand pose
 
     @property
     def n_betas(self) -> int:
@@ -144,8 +146,14 @@ def load_model(path: str | None = None, gender: str = "neutral", kind: str = "sm
                               f"layout for {V} vertices and {n} joints")
     table = SMPLX_JOINT_NAMES if kind == "smplx" else SMPL_JOINT_NAMES
     names = table[:n] if n <= len(table) else tuple(f"joint{i}" for i in range(n))
+    hands = [np.asarray(data[k], np.float64) for k in ("hands_componentsl", "hands_componentsr",
+                                                        "hands_meanl", "hands_meanr") if k in data]
+    if len(hands) == 4 and (any(h.size != 45 * 45 for h in hands[:2]) or any(h.size != 45 for h in hands[2:])):
+        raise ConfigError("model file hands_components", file, "expected 45 x 45 components and 45 means a hand")
     return ModelFile(kind, gender, file, v, np.asarray(data["f"], np.int64), dirs[:, :, :n_shape],
-                     dirs[:, :, n_shape:], posedirs, J, weights, parents, names)
+                     dirs[:, :, n_shape:], posedirs, J, weights, parents, names,
+                     np.stack([h.reshape(45, 45) for h in hands[:2]]) if len(hands) == 4 else None,
+                     np.stack([h.reshape(45) for h in hands[2:]]) if len(hands) == 4 else None)
 
 
 def smplx_body(betas=None, path: str | None = None, gender: str = "neutral") -> BodyMesh:

@@ -8,8 +8,8 @@ def run(args) -> int:
     from synmitsuba.annotate.smplx_fit import SMPLXOptions
     from synmitsuba.generate.body_models import add_body_model_fits
     options = SMPLXOptions.from_dict({"enabled": True, "model_path": args.model_path, "smpl": args.smpl,
-                                      "gender": args.gender, "n_betas": args.betas,
-                                      "threshold_mm": args.threshold_mm}, "")  # the files are checked first
+                                      "gender": args.gender, "n_betas": args.betas, "threshold_mm": args.threshold_mm,
+                                      "hand_pca": args.hand_pca}, "")  # the files are checked first
     rows = add_body_model_fits(args.dataset, options, progress=not args.quiet)
     flagged = sum(r["flagged"] for r in rows)
     worst = max(r["surface_mean_mm"] for r in rows)
@@ -33,5 +33,8 @@ def add_parser(sub) -> None:
                    help="model file; auto fits each one present and keeps the best")
     p.add_argument("--betas", type=positive_int, default=10, help="shape coefficients fitted")
     p.add_argument("--threshold-mm", type=float, default=10.0, help="flag frames whose mean surface distance exceeds it")
+    p.add_argument("--hand-pca", type=int, default=0, metavar="K",
+                   help="also write each hand as K of the model file's hand PCA components (left_hand_pca, "
+                   "right_hand_pca: smplx's use_pca=True, num_pca_comps=K, flat_hand_mean=False); 0: none")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
