@@ -332,3 +332,34 @@ def test_backlit_ears_glow_and_front_light_is_unchanged(sm, human):
     gain = centre[1] / centre[0]
     assert gain[0] > 1.15 and gain[0] > gain[2], gain
     assert abs(front[1].mean() / front[0].mean() - 1) < 0.03
+
+
+def test_palms_and_soles_are_lighter_than_the_backs_of_hands_and_feet():
+    """On a dark skin, read back at the texels of the rest body's vertices (and converted to
+    CIELAB by colour-science): the palms are lighter than the backs of the hands, and the soles
+    than the tops of the feet, by at least a quarter of the way to L* 82."""
+    from conftest import colour_science
+    from synmitsuba.body.anny_model import part_labels
+    from synmitsuba.body.hand_points import dorsal_axis
+    from synmitsuba.geometry import vertex_normals
+    colour = colour_science()
+    recipe = sm.sample_subject(np.random.default_rng(6100), {"accessories": [], "texture_size": 64})
+    h = sm.build_subject(recipe)
+    body, tex = h.body, h.parts[0].material.texture
+    size = tex.shape[0]
+
+    def lightness(ids):
+        rgb = []
+        for v in ids[:60]:
+            f = int(np.flatnonzero((body.faces == v).any(1))[0])
+            u, w = body.uv[body.face_uv[f][list(body.faces[f]).index(v)]]
+            rgb.append(tex[int((1 - w) * size), int(u * size)])
+        return colour.XYZ_to_Lab(colour.sRGB_to_XYZ(np.mean(rgb, 0), apply_cctf_decoding=False))[0]
+    n, labels = vertex_normals(body.vertices, body.faces), part_labels(body)
+    back = dorsal_axis(h.skeleton, "L")
+    hand = (labels == 2) & (body.vertices[:, 0] > 0)
+    foot = labels == 3
+    skin_l = recipe.skin.lab()[0]
+    assert skin_l < 45  # a dark skin, where palms differ most
+    for light, dark in ((hand & (n @ -back > 0.8), hand & (n @ back > 0.8)), (foot & (n[:, 1] < -0.9), foot & (n[:, 1] > 0.8))):
+        assert lightness(np.flatnonzero(light)) - lightness(np.flatnonzero(dark)) > (82 - skin_l) / 4

@@ -153,3 +153,35 @@ def test_the_sole_and_the_upper_render_in_their_own_colours():
     for px in (sole_px, upper_px):
         assert layer[px[1], px[0]] == int(sm.Layer.SHOES)
     assert lum[upper_px[1], upper_px[0]] > 4 * lum[sole_px[1], sole_px[0]]
+
+
+def test_laces_are_cords_over_the_throat_in_the_laces_colour(shod):
+    """Laced styles get a cord across the throat every ``LACE_PITCH`` of u, lying on the upper
+    (every point within 4 mm of its surface, the middles standing out 1.5 mm or more, the ends
+    sunk into it) with uv on the bar ``shoe_texture`` paints in the laces' colour; the built
+    shoe carries them; sandals have none."""
+    from synmitsuba.body.shoes import LACE_PITCH, LACE_SPAN, foot_points, lace_mesh, shoe_colours, shoe_mesh, shoe_texture
+    from synmitsuba.body.textures import GarmentTextureParams, lab_to_linear_rgb
+    kind, h = shod
+    style = SHOE_STYLES[kind]
+    g = next(m for m in h.garments if m.params.kind == kind).params
+    v, f, uv = shoe_mesh(foot_points(h.body, h.regions, 1.0), style, g.thickness, 0.004, g.length)
+    cv, cf, cuv = lace_mesh(v, f, uv, style)
+    if not style.laces:
+        assert len(cv) == 0
+        return
+    cords = int(LACE_SPAN / LACE_PITCH)
+    assert len(cv) % cords == 0 and len(cf) == cords * (len(cf) // cords)
+    tri = v[f]
+    tri = tri[np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1) > 1e-12]  # no slivers
+    d = point_triangle_distances(cv, tri).min(1)
+    assert d.max() < 0.004
+    per = cv.reshape(cords, -1, 3)
+    mids = np.array([point_triangle_distances(c[len(c) // 2 - 4:len(c) // 2 + 4].mean(0)[None], tri).min() for c in per])
+    assert mids.min() > 0.0015, mids
+    albedo, _ = shoe_texture(style, GarmentTextureParams(base_lab=[40.0, 0.0, 0.0], seed=g.texture.seed), 256)
+    lace = lab_to_linear_rgb(shoe_colours(style, g.texture.seed)[2])
+    texels = albedo[((1 - cuv[:, 1]) * 256).astype(int), (cuv[:, 0] * 256).astype(int)]
+    assert np.allclose(texels, lace, atol=1e-6)
+    shoe = _shoe(h)
+    assert (np.isin(shoe.uv[:, 0], np.unique(cuv[:, 0])) & (shoe.uv[:, 1] == cuv[0, 1])).sum() == 2 * len(cv)

@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.collide import neighbour_mean
-from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, foot_points, sample_shoe_texture, shaft_mesh, shoe_material,
+from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, foot_points, lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material,
                                    shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
@@ -353,12 +353,14 @@ SHOE_EDGE = 0.003  # metres: the upper's thickness, turned in along its top line
 
 
 def _shoe_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
-    """A pair of ``body.shoes`` shoes (and boot shafts) round the feet, the top lines hemmed."""
+    """A pair of ``body.shoes`` shoes (laces as cords, and boot shafts) round the feet, the top
+    lines hemmed."""
     style = SHOE_STYLES[g.kind]
     parts = []
     for side in (1.0, -1.0):
         foot = foot_points(body, r, side)
-        parts.append(shoe_mesh(foot, style, g.thickness, offset, g.length))
+        sv, sf, suv = shoe_mesh(foot, style, g.thickness, offset, g.length)
+        parts += [(sv, sf, suv), lace_mesh(sv, sf, suv, style)]
         if style.shaft[1]:
             top = g.thickness + style.shaft[0] + (style.shaft[1] - style.shaft[0]) * g.length
             parts.append(shaft_mesh(foot, g.thickness, top, offset))

@@ -58,3 +58,16 @@ def hand_points(skeleton, vertices: np.ndarray, weights: np.ndarray) -> HandPoin
             along = P[chain[2]] - P[chain[1]]
             tips[h, f] = end[np.argmax((vertices[end] - P[chain[2]]) @ along)]
     return HandPoints(joints, tips)
+
+
+def dorsal_axis(skeleton, s: str) -> np.ndarray:
+    """Unit direction out of the back of hand ``s`` ("L" or "R") in the rest pose: normal to the
+    plane of the middle finger and the knuckles, on the side away from the thumb."""
+    P = skeleton.rest_positions
+
+    def at(name):
+        return P[skeleton.index(f"{name}.{s}")]
+    dorsal = np.cross(at("finger3-3") - at("finger3-1"), at("finger5-1") - at("finger2-1"))
+    dorsal /= np.linalg.norm(dorsal)
+    return -dorsal if (at("finger1-2") - at("finger3-1")) @ dorsal > 0 else dorsal  # the thumb sits on the palm's side
+

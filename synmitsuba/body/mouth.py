@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.body.textures import lab_to_linear_rgb
+from synmitsuba.body.topology import closed_tube, merge_meshes
 from synmitsuba.scene.materials import Material
 
 JAW_UNITS = ("jawOpen", "jawForward", "jawLeft", "jawRight")
@@ -147,36 +148,6 @@ def _profile(kind: int, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return w * round_off, t * round_off
 
 
-def _tube(rings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A closed surface through ``rings`` (K, M, 3), each a closed loop, fans capping both
-    ends, faces wound outward."""
-    k, m = rings.shape[:2]
-    v = np.concatenate([rings.reshape(-1, 3), rings[[0, -1]].mean(1)])
-    i, j = np.meshgrid(np.arange(k - 1), np.arange(m), indexing="ij")
-    a, b = (i * m + j).ravel(), (i * m + (j + 1) % m).ravel()
-    f = np.concatenate([np.stack([a, a + m, b], 1), np.stack([b, a + m, b + m], 1)])
-    ring = np.arange(m)
-    caps = [np.stack([np.full(m, k * m), ring, (ring + 1) % m], 1),
-            np.stack([np.full(m, k * m + 1), (k - 1) * m + (ring + 1) % m, (k - 1) * m + ring], 1)]
-    f = np.concatenate([f, *caps])
-    if _volume(v, f) < 0:
-        f = f[:, ::-1]
-    return v, f
-
-
-def _volume(v: np.ndarray, f: np.ndarray) -> float:
-    return float(np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6)
-
-
-def _merge(meshes: list) -> tuple[np.ndarray, np.ndarray]:
-    out_v, out_f, n = [], [], 0
-    for v, f in meshes:
-        out_v.append(v)
-        out_f.append(f + n)
-        n += len(v)
-    return np.concatenate(out_v), np.concatenate(out_f)
-
-
 @dataclass(frozen=True)
 class Jaw:
     """One row of teeth: its arch (labial side ``inset`` metres in from ``arch``'s), the height
@@ -217,8 +188,8 @@ class Jaw:
                      + (self.up * h * (1 - vs))[:, None, None] * np.array([0, 1, 0])
                      + (0.5 * w * wv[:, None] * ring_a)[..., None] * tan[0]
                      + (0.5 * t * tv[:, None] * ring_b)[..., None] * nrm[0])
-            meshes.append(_tube(rings))
-        return _merge(meshes)
+            meshes.append(closed_tube(rings))
+        return merge_meshes(meshes)
 
     def gums(self, step: float = 0.001) -> tuple[np.ndarray, np.ndarray]:
         """A band over the crowns' necks, scalloped: its margin a millimetre onto each crown at
@@ -239,7 +210,7 @@ class Jaw:
         loop = [(0.0, 0.0), (0.0, 0.6), (0.15, 1.0), (0.85, 1.0), (1.0, 0.6), (1.0, 0.0)]  # (inward, up) shares
         rings = np.stack([p - (a * thick)[:, None] * nrm + (margin + b * GUM_HEIGHT)[:, None] * up
                           for a, b in loop], 1)
-        return _tube(rings)
+        return closed_tube(rings)
 
 
 def jaws(helper: np.ndarray) -> tuple[Jaw, Jaw]:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.body.textures import GarmentTextureParams, grid_noise, lab_to_linear_rgb
-from synmitsuba.body.topology import cut
+from synmitsuba.body.topology import closed_tube, cut, merge_meshes
 
 STATIONS = 30          # rings along the shoe
 ARCH = 24              # points of a ring's arch over the foot
@@ -25,6 +25,9 @@ UPPER_V = 0.3
 CAP = 0.035            # metres over which the toe and the heel round off in plan
 BACK = 0.006           # metres the heel counter reaches behind the heel
 ALLOWANCE = 0.004      # metres an upper keeps from the foot with no ease
+LACE_PITCH, LACE_SPAN, LACE_HALF_V = 0.035, 0.22, 0.07  # uv: laces every LACE_PITCH of u over the throat's
+# first LACE_SPAN, reaching LACE_HALF_V either side of the arch's top (where shoe_texture paints them)
+LACE_WIDTH, LACE_THICK = 0.002, 0.0008  # metres: a flat lace's half width and half thickness
 
 
 @dataclass(frozen=True)
@@ -183,6 +186,57 @@ def _opening(v: np.ndarray, uv: np.ndarray, style: ShoeStyle, sole: float, colla
         dip = collar - 0.012 * np.clip(along / style.throat, 0, 1)  # the top line falls a little to the throat
         keep = np.maximum(dip - y, (along - style.throat) * (toes - heel))
     return np.where(uv[:, 1] < UPPER_V, 1.0, keep)
+
+
+def surface_at(v: np.ndarray, f: np.ndarray, uv: np.ndarray, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points (Q, 3) and unit normals of the mesh where its uv is ``query`` (Q, 2): the
+    barycentric position in the first face whose uv triangle holds it (nan where none does)."""
+    from synmitsuba.geometry import vertex_normals
+    t = uv[f]                                               # (F, 3, 2)
+    e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    ok = np.abs(det) > 1e-14
+    d = query[:, None] - t[None, :, 0]                      # (Q, F, 2)
+    a = np.where(ok, (d[..., 0] * e2[:, 1] - d[..., 1] * e2[:, 0]) / np.where(ok, det, 1), -1)
+    b = np.where(ok, (e1[:, 0] * d[..., 1] - e1[:, 1] * d[..., 0]) / np.where(ok, det, 1), -1)
+    inside = (a >= 0) & (b >= 0) & (a + b <= 1)
+    face = np.argmax(inside, 1)
+    hit = inside[np.arange(len(query)), face]
+    w = np.stack([1 - a - b, a, b], -1)[np.arange(len(query)), face]      # (Q, 3)
+    corners = f[face]
+    n = vertex_normals(v, f)[corners]
+    n = (w[..., None] * n).sum(1)
+    points = np.where(hit[:, None], (w[..., None] * v[corners]).sum(1), np.nan)
+    return points, np.where(hit[:, None], n / np.linalg.norm(n, axis=1, keepdims=True), np.nan)
+
+
+def lace_mesh(v: np.ndarray, f: np.ndarray, uv: np.ndarray, style: ShoeStyle, steps: int = 11, sides: int = 8):
+    """Laces as flat cords over the throat of a shoe (its cut mesh), where ``shoe_texture``
+    paints them: one across every ``LACE_PITCH`` of u, from eyestay to eyestay, bowed 2 mm over
+    the tongue, its ends sunk into the upper as through eyelets; uv on the painted lace, so a
+    cord takes the laces' colour. (vertices, faces, uv); nothing for a style without laces."""
+    if not style.laces:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros((0, 2))
+    mid = (UPPER_V + 1) / 2
+    t = np.linspace(0.0, 1.0, steps)
+    ang = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    cords, at = [], []
+    for k in range(int(LACE_SPAN / LACE_PITCH)):
+        u = style.throat + LACE_PITCH * (k + 0.5)
+        p, n = surface_at(v, f, uv, np.column_stack([np.full(steps, u), mid + LACE_HALF_V * (2 * t - 1)]))
+        if np.isnan(p).any():
+            continue
+        path = p + (-0.0005 + 0.0025 * np.sin(np.pi * t) ** 0.5)[:, None] * n
+        across = np.cross(np.gradient(path, axis=0), n)
+        across /= np.linalg.norm(across, axis=1, keepdims=True)
+        rings = (path[:, None] + LACE_THICK * np.cos(ang)[None, :, None] * n[:, None]
+                 + LACE_WIDTH * np.sin(ang)[None, :, None] * across[:, None])
+        cords.append(closed_tube(rings))
+        at.append(np.tile([u, mid], (len(cords[-1][0]), 1)))
+    if not cords:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros((0, 2))
+    cv, cf = merge_meshes(cords)
+    return cv, cf, np.concatenate(at)
 
 
 def shaft_mesh(points: np.ndarray, sole: float, top: float, allowance: float, n: int = 32):

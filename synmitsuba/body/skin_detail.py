@@ -84,3 +84,15 @@ def translucency_weights(vertices: np.ndarray, normals: np.ndarray, keep: np.nda
     depth = skin_thickness(vertices, normals, keep & places)
     lo, hi = THIN_SKIN
     return np.clip((hi - depth) / (hi - lo), 0.0, 1.0) * places
+
+
+def palm_weights(vertices: np.ndarray, normals: np.ndarray, hands: np.ndarray, feet: np.ndarray,
+                 palms: np.ndarray) -> np.ndarray:
+    """Per-vertex weights in [0, 1] of the palms and soles, whose skin holds little melanin:
+    hand vertices (``hands`` mask) facing their palm's rest direction (``palms`` (2, 3), left
+    then right: ``hand_points.dorsal_axis`` negated; the left hand is the one at x > 0), fingers'
+    undersides included, and foot vertices (``feet``) facing the ground."""
+    left = vertices[:, 0] > 0
+    toward = np.where(left, normals @ palms[0], normals @ palms[1])
+    w = np.clip(toward / 0.5, 0.0, 1.0) * hands
+    return np.maximum(w, np.clip((-normals[:, 1] - 0.3) / 0.4, 0.0, 1.0) * feet)

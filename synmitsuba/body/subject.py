@@ -19,13 +19,13 @@ from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, inc
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment,
                                       footwear_lift, metres_per_uv)
 from synmitsuba.body.face_points import face_rows
-from synmitsuba.body.hand_points import HandPoints, hand_points
+from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
 from synmitsuba.body.recipe import SubjectRecipe
-from synmitsuba.body.skin_detail import face_weights, pore_repeat, translucency_weights
+from synmitsuba.body.skin_detail import face_weights, palm_weights, pore_repeat, translucency_weights
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
                                       paint_weights, skin_material)
 from synmitsuba.body.topology import split_at_seams, weld
@@ -190,8 +190,10 @@ class LayeredHuman:
         weights = face_weights(body.vertices, self.eyes.centres, nose)
         keep = ~np.isin(np.arange(len(body.vertices)), np.concatenate(list(helper_vertices().values())))
         ears = kp[[names.index("left_ear"), names.index("right_ear")]]
-        weights["translucency"] = translucency_weights(body.vertices, vertex_normals(body.vertices, body.faces), keep,
-                                                       ears, nose, part_labels(body) == 2)
+        normals, labels = vertex_normals(body.vertices, body.faces), part_labels(body)
+        weights["translucency"] = translucency_weights(body.vertices, normals, keep, ears, nose, labels == 2)
+        palms = -np.stack([dorsal_axis(body.skeleton, s) for s in "LR"])
+        weights["palms"] = palm_weights(body.vertices, normals, labels == 2, labels == 3, palms)
         return {**anny_uv_masks(size), **{k: paint_weights(w, body.faces, body.uv, body.face_uv, size)
                                           for k, w in weights.items()}}
 

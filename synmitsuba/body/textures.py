@@ -347,9 +347,13 @@ def sample_skin(rng: np.random.Generator) -> SkinParams:
                       seed=int(rng.integers(0, 2 ** 31)))
 
 
+PALM_L, PALM_LIGHTENING, PALM_SHARE = 82.0, 0.45, 0.85  # palms and soles: L moves this share of the way
+# to PALM_L (a dark skin's L 30 to 53, a light one's 70 to 75), blended in at PALM_SHARE
+
+
 def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
-    """Skin albedo (size, size, 3) linear: the tone, darker/redder lips, lighter nails, and
-    freckles and blush inside the face mask. Missing masks skip their layer."""
+    """Skin albedo (size, size, 3) linear: the tone, darker/redder lips, lighter nails, lighter
+    palms and soles, and freckles and blush inside the face mask. Missing masks skip their layer."""
     lab = p.lab()
     img = np.broadcast_to(lab_to_linear_rgb(lab).astype(np.float32), (size, size, 3)).copy()
 
@@ -380,6 +384,8 @@ def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarr
             img = blend(masks[key] * p.nail_lightening, lab + [15, -5, -5])
     if "under_eye" in masks and p.under_eye > 0:
         img = blend(masks["under_eye"] * p.under_eye, lab + [-12, 4, -6])
+    if "palms" in masks:  # palms and soles: lighter and pinker, far more so on dark skin
+        img = blend(masks["palms"] * PALM_SHARE, lab + [PALM_LIGHTENING * (PALM_L - lab[0]), 3, -4])
     return img.astype(np.float32)
 
 

@@ -84,3 +84,35 @@ def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     first = np.full(labels.max() + 1, n)
     np.minimum.at(first, labels, np.arange(n))
     return first[labels]
+
+
+def closed_tube(rings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A closed surface through ``rings`` (K, M, 3), each a closed loop, fans capping both
+    ends, faces wound outward."""
+    k, m = rings.shape[:2]
+    v = np.concatenate([rings.reshape(-1, 3), rings[[0, -1]].mean(1)])
+    i, j = np.meshgrid(np.arange(k - 1), np.arange(m), indexing="ij")
+    a, b = (i * m + j).ravel(), (i * m + (j + 1) % m).ravel()
+    f = np.concatenate([np.stack([a, a + m, b], 1), np.stack([b, a + m, b + m], 1)])
+    ring = np.arange(m)
+    caps = [np.stack([np.full(m, k * m), ring, (ring + 1) % m], 1),
+            np.stack([np.full(m, k * m + 1), (k - 1) * m + (ring + 1) % m, (k - 1) * m + ring], 1)]
+    f = np.concatenate([f, *caps])
+    if signed_volume(v, f) < 0:
+        f = f[:, ::-1]
+    return v, f
+
+
+def signed_volume(v: np.ndarray, f: np.ndarray) -> float:
+    """The volume a closed surface encloses, negative when its faces wind inward."""
+    return float(np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6)
+
+
+def merge_meshes(meshes: list) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) pairs as one mesh."""
+    out_v, out_f, n = [], [], 0
+    for v, f in meshes:
+        out_v.append(v)
+        out_f.append(f + n)
+        n += len(v)
+    return np.concatenate(out_v), np.concatenate(out_f)

@@ -19,6 +19,7 @@ from typing import Callable
 
 import numpy as np
 
+from synmitsuba.body.hand_points import dorsal_axis
 from synmitsuba.errors import ConfigError
 
 FINGERS = ("index", "middle", "ring", "pinky")  # anny's finger2 .. finger5 (finger1 is the thumb)
@@ -255,11 +256,7 @@ def hand_axes(skeleton, side: str) -> HandAxes:
     def at(name):
         return P[skeleton.index(f"{name}.{s}")]
     knuckles = at("finger5-1") - at("finger2-1")             # index -> pinky
-    hand = at("finger3-3") - at("finger3-1")
-    dorsal = np.cross(hand, knuckles)
-    dorsal /= np.linalg.norm(dorsal)
-    if (at("finger1-2") - at("finger3-1")) @ dorsal > 0:    # the thumb sits on the palm's side
-        dorsal = -dorsal
+    dorsal = dorsal_axis(skeleton, s)
     radial = -knuckles / np.linalg.norm(knuckles)            # pinky -> index
     out = HandAxes(dorsal=dorsal)
     for f, name in enumerate(FINGERS):
