@@ -78,6 +78,22 @@ def test_a_rerun_with_other_settings_is_refused_naming_them(tiny, tmp_path):
     assert json.loads((out / "config.json").read_text()) == record  # the dataset's own settings stay recorded
 
 
+def test_a_setting_added_since_counts_only_away_from_its_default():
+    """A dataset recorded before a setting existed (``smplx.hand_pca`` here) is not "made with
+    other settings" when the rerun leaves it at its default, which does what the old run did;
+    set otherwise, or any recorded setting changed, it is named."""
+    from synmitsuba.generate.config import GenerateConfig
+    from synmitsuba.generate.run import config_changes, config_record
+    new = json.loads(json.dumps(config_record(GenerateConfig(scene="scenes/demo.yaml"))))
+    old = json.loads(json.dumps(new))
+    del old["config"]["smplx"]["hand_pca"]
+    assert config_changes(old, new) == []
+    new["config"]["smplx"]["hand_pca"] = 12
+    spp = old["config"]["render"]["spp"]
+    new["config"]["render"]["spp"] = spp + 1
+    assert config_changes(old, new) == [f"render.spp: {spp!r} -> {spp + 1!r}", "smplx.hand_pca: None -> 12"]
+
+
 def test_a_killed_worker_loses_and_duplicates_nothing(tmp_path):
     out = tmp_path / "kill"
     proc = subprocess.Popen([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",

@@ -207,11 +207,15 @@ def config_record(config: GenerateConfig) -> dict:
 
 
 def config_changes(old: dict, new: dict) -> list[str]:
-    """``key: old -> new`` for every setting (and the version) that differs, but ``UNCOMPARED``."""
+    """``key: old -> new`` for every setting (and the version) that differs, but ``UNCOMPARED``;
+    a setting the old record lacks counts only when the new one is not its default (a setting
+    added since, at its default, does what the old run did)."""
     a = {"synmitsuba": old.get("synmitsuba"), **_flat(old.get("config", {}))}
     b = {"synmitsuba": new["synmitsuba"], **_flat(new["config"])}
+    defaults = _flat(json.loads(json.dumps(GenerateConfig().to_dict())))
     return [f"{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a) | set(b))
-            if k not in UNCOMPARED and a.get(k) != b.get(k)]
+            if k not in UNCOMPARED and a.get(k) != b.get(k) and not (k not in a and k in defaults
+                                                                      and b.get(k) == defaults[k])]
 
 
 def _check_run_config(out: str, config: GenerateConfig, allow_change: bool) -> None:
