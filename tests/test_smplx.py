@@ -163,7 +163,7 @@ def test_fit_recovers_a_known_hand_pose_and_expression(models, walker, sm):
     assert deg.max() < 1e-6 and np.allclose(coef[:, 0], (fit.pose[:, 25:40].reshape(3, 45) - mean["l"]) @ comps["l"].T)
 
 
-def test_hand_pca_without_components_in_the_file_is_one_line_before_any_fit(models, tmp_path):
+def test_hand_pca_without_components_in_the_file_is_one_line_before_any_fit(models, walker, tmp_path, sm):
     """A model file without the hand PCA arrays: asking for ``hand_pca`` names the field, the
     file and the fix when the options are read, before any work."""
     from synmitsuba.annotate.smplx_fit import SMPLXOptions
@@ -175,6 +175,10 @@ def test_hand_pca_without_components_in_the_file_is_one_line_before_any_fit(mode
     assert err.value.field == "hand_pca" and "hand_pca: 0" in str(err.value)
     with pytest.raises(ConfigError):
         SMPLXOptions.from_dict({"enabled": True, "model_path": models, "hand_pca": 46})
+    human, clip = walker  # the API says so too, from the loaded file, before the shape step
+    with pytest.raises(ConfigError) as err:
+        sm.fit_smplx(human, clip, str(tmp_path), gender="neutral", frames=[0], hand_pca=12)
+    assert err.value.field == "hand_pca"
 
 
 def test_smpl_fit_and_the_error_flag(models, walker, sm):

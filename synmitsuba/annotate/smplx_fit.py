@@ -187,9 +187,11 @@ def fit_smplx(human, clip, model_path: str | None = None, kind: str = "smplx", g
         raise ConfigError("frames", frames.tolist()[:8], f"give clip frames in [0, {clip.n_frames - 1}]")
     genders = available_genders(model_path, kind) if gender == "auto" else [gender]
     models = [load_model(model_path, g, kind) for g in (genders or ["neutral"])]
-    if hand_pca and kind == "smplx":
+    if hand_pca and kind == "smplx":  # the loaded arrays: .pkl files too, without reading any file again
         for m in models:
-            check_hand_components(m.path, hand_pca)
+            if m.hands_components is None or m.hands_mean is None:
+                raise ConfigError("hand_pca", hand_pca, f"{m.path} has no hands_components/hands_mean arrays (the "
+                                  "published SMPL-X files do); use hand_pca: 0 to write the full axis-angle only")
     shapes = [fit_shape(m, body, n_betas, s) for m in models]
     shape = min(shapes, key=lambda sh: sh.error_mm)  # the gender file that fits best
     r = fit_frames(shape, body, clip, frames, s)
@@ -197,7 +199,8 @@ def fit_smplx(human, clip, model_path: str | None = None, kind: str = "smplx", g
     fit = SMPLXFit(m.kind, m.gender, shape.betas, frames, r.pose, r.transl, r.pelvis, r.surface_mean_mm,
                    r.surface_max_mm, r.joint_mm, threshold_mm, r.expression, r.hand_mm, r.face_mm, m.joint_names,
                    meta={"model_file": m.path, "shape_error_mm": shape.error_mm, "n_betas": len(shape.betas)})
-    if hand_pca and kind == "smplx" and m.hands_components is not None and m.hands_mean is not None:
+    if hand_pca and kind == "smplx":
+        assert m.hands_components is not None and m.hands_mean is not None  # checked above
         fit.hand_pca, fit.hand_pca_deg = pca_hands(r.pose[:, 25:55].reshape(-1, 2, 15, 3), m.hands_components,
                                                    m.hands_mean, hand_pca)
     return fit
