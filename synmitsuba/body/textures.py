@@ -351,9 +351,20 @@ PALM_L, PALM_LIGHTENING, PALM_SHARE = 82.0, 0.45, 0.85  # palms and soles: L mov
 # to PALM_L (a dark skin's L 30 to 53, a light one's 70 to 75), blended in at PALM_SHARE
 
 
+TONGUE_LAB = (54.0, 27.0, 11.0)  # a healthy tongue's body (photographic tongue-colour studies: L* 50-58,
+# a* 24-30, b* 8-14), a little darker under darker skin, as its pigmented papillae make it
+
+
+def tongue_lab(skin_lab) -> np.ndarray:
+    """The tongue's CIELAB for a skin of ``skin_lab``: ``TONGUE_LAB``, L* lowered by a tenth of
+    the skin's depth below L* 60."""
+    return np.asarray(TONGUE_LAB) - [0.1 * max(0.0, 60.0 - float(skin_lab[0])), 0.0, 0.0]
+
+
 def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
     """Skin albedo (size, size, 3) linear: the tone, darker/redder lips, lighter nails, lighter
-    palms and soles, and freckles and blush inside the face mask. Missing masks skip their layer."""
+    palms and soles, a tongue-coloured tongue, and freckles and blush inside the face mask. Missing
+    masks skip their layer."""
     lab = p.lab()
     img = np.broadcast_to(lab_to_linear_rgb(lab).astype(np.float32), (size, size, 3)).copy()
 
@@ -386,6 +397,8 @@ def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarr
         img = blend(masks["under_eye"] * p.under_eye, lab + [-12, 4, -6])
     if "palms" in masks:  # palms and soles: lighter and pinker, far more so on dark skin
         img = blend(masks["palms"] * PALM_SHARE, lab + [PALM_LIGHTENING * (PALM_L - lab[0]), 3, -4])
+    if "tongue" in masks:
+        img = blend(masks["tongue"], tongue_lab(lab))
     return img.astype(np.float32)
 
 
@@ -418,7 +431,8 @@ def paint_weights(weights: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_u
     return img[..., 0]
 
 
-SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "tzone": 0.32, "lips": 0.3}  # oilier face and T-zone, moist lips
+SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "tzone": 0.32, "lips": 0.3, "tongue": 0.2}  # oilier face and T-zone,
+# moist lips, a wet tongue
 
 
 def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
@@ -426,7 +440,7 @@ def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.nda
     pore-scale and blotch variation, so highlights break up as on real skin instead of one
     even sheen."""
     rough = np.full((size, size), SKIN_ROUGHNESS["body"], np.float32)
-    for key in ("face", "tzone", "lips"):
+    for key in ("face", "tzone", "lips", "tongue"):
         if key in masks:
             m = np.clip(masks[key], 0, 1).astype(np.float32)
             rough += (SKIN_ROUGHNESS[key] - rough) * m
