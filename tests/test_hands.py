@@ -16,11 +16,11 @@ def human():
     return sm.build_subject(recipe)
 
 
-def _posed_with(human, behaviour: str, seed: int = 0):
+def _posed_with(human, behaviour: str, seed: int = 0, variant: int = 0):
     """Rest body, both hands holding ``behaviour``: (rotations, root)."""
     clip = retargeted_clip(human, MotionSpec("idle", 3, 0.2, 10))
-    m = H.with_hands(clip, H.HandTrack([H.HandKey(0.0, behaviour, seed)], [H.HandKey(0.0, behaviour, seed + 1)],
-                                       drift_deg=0.0))
+    m = H.with_hands(clip, H.HandTrack([H.HandKey(0.0, behaviour, seed, variant)],
+                                       [H.HandKey(0.0, behaviour, seed + 1, variant)], drift_deg=0.0))
     return m.rotations[0], m.root_translation[0]
 
 
@@ -207,3 +207,16 @@ def test_amass_fingers_drive_annys_fingers(human, tmp_path):
     flat = sm.retarget(sm.load_amass(tmp_path / "flat.npz"), human.skeleton)
     assert not flat.meta["fingers"]
     assert H.with_hands(flat, draw_hands(np.random.default_rng(0), flat)) is not flat
+
+
+def test_a_fists_thumb_lies_over_the_fingers(human):
+    """In a fist (and the fingers folded for a point or a count of one), the thumb's tip lies
+    over the index and middle fingers' middle bones (within half a hand size of their joints'
+    keypoints, nearer them than the wrist), not curled back to the wrist beside the fist."""
+    for behaviour, variant in (("fist", 0), ("point", 0), ("count", 1)):
+        for seed in range(4):
+            rot, root = _posed_with(human, behaviour, seed, variant)
+            for kp in human.hand_keypoints(rot, root):
+                size = np.ptp(kp, axis=0).max()
+                near = np.linalg.norm(kp[[10, 11] if behaviour != "fist" else [6, 7, 10, 11]] - kp[4], axis=1).min()
+                assert near < 0.5 * size and near < np.linalg.norm(kp[4] - kp[0]), (behaviour, seed, near / size)

@@ -66,9 +66,16 @@ def _relaxed(rng, variant: int = 0) -> HandPose:
                     np.array([8, 12, 12, 12]) + rng.normal(0, 4, 4))
 
 
+# the thumb of a fist (across, palmar, MCP, IP): turned across the palm, its last joint bent over
+# the index and middle fingers' middle bones, as a closed hand holds it (found by fitting the thumb
+# tip to them on anny's hands, then rounded; the earlier (32, 30, 38, 30) curled it back towards
+# the wrist, sticking out of the fist from the side)
+FIST_THUMB = (40.0, 0.0, 5.0, 70.0)
+
+
 def _fist(rng, variant: int = 0) -> HandPose:
     """A loose fist, the thumb over the fingers."""
-    return HandPose(_fingers(72, 92, 48, 5.0, rng), np.zeros(4), np.array([32, 30, 38, 30]) + rng.normal(0, 4, 4))
+    return HandPose(_fingers(72, 92, 48, 5.0, rng), np.zeros(4), np.array(FIST_THUMB) + rng.normal(0, 4, 4))
 
 
 def _open(rng, variant: int = 0) -> HandPose:
@@ -80,7 +87,6 @@ def _point(rng, variant: int = 0) -> HandPose:
     """The index out, the others in a fist, the thumb on the middle finger."""
     p = _fist(rng)
     p.flex[0] = np.array([0.0, 4.0, 2.0]) + rng.normal(0, 2, 3)
-    p.thumb = np.array([36, 34, 34, 28]) + rng.normal(0, 3, 4)
     return p
 
 
@@ -97,7 +103,8 @@ def _count(rng, variant: int = 0) -> HandPose:
     p = _fist(rng)
     p.flex[:min(n, 4)] = np.array([0.0, 4.0, 2.0]) + rng.normal(0, 2, (min(n, 4), 3))
     p.spread[:min(n, 4)] = rng.uniform(4, 12, min(n, 4))
-    p.thumb = np.array([-8, 4, 0, 0]) + rng.normal(0, 3, 4) if n == 5 else np.array([38, 36, 36, 30]) + rng.normal(0, 3, 4)
+    if n == 5:
+        p.thumb = np.array([-8, 4, 0, 0]) + rng.normal(0, 3, 4)
     return p
 
 
