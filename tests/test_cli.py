@@ -148,6 +148,7 @@ def test_version_and_help_with_defaults(capsys):
     (["subject", "--res", "big", "--out", "o"], ["--res", "'big'", "WIDTHxHEIGHT"]),
     (["subject", "--views", "0", "--out", "o"], ["--views", "'0'"]),
     (["subject", "--seed", "-1", "--out", "o"], ["--seed", "'-1'"]),
+    (["subject", "--env", "hdri_studio,moon", "--out", "o"], ["--env", "'moon'", "hdri_studio"]),
     (["motion", "preview", "walk", "--frames", "0", "--out", "o"], ["--frames", "'0'"]),
     (["motion", "preview", "walk", "--seconds", "-2", "--out", "o"], ["--seconds"]),
     (["motion", "preview", "moonwalk", "--out", "o"], ["CLIP = 'moonwalk'", "walk"]),
@@ -186,6 +187,25 @@ def test_no_third_party_banner_and_clean_stdout(tmp_path):
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == str(tmp_path / "s.png")
     assert "Warp" not in r.stderr and "CUDA" not in r.stderr, r.stderr
+
+
+def test_portraits_under_an_hdri_are_two_views_each(sm, tmp_path):
+    """``--closeup portrait --env hdri_studio``: a frontal and a three-quarter tile per subject,
+    in the studio panorama: behind the head its curtains, not the preview stage's sky (the same
+    command without ``--env``); a ``.jpg`` sheet is a JPEG."""
+    from PIL import Image
+    tiles = {}
+    for env in (["--env", "hdri_studio"], []):
+        out = tmp_path / f"p{len(env)}.{'jpg' if env else 'png'}"
+        assert main(["subject", "--sheet", "1", "--closeup", "portrait", "--res", "32x32", "--spp", "2",
+                     "--out", str(out)] + env) == 0
+        with Image.open(out) as im:
+            assert im.format == ("JPEG" if env else "PNG")
+            tiles[len(env)] = np.asarray(im.convert("RGB")).astype(float)
+    assert tiles[2].shape == (32 + 4, 2 * 32 + 6, 3)
+    for x in (2, 2 + 34):
+        studio, sky = (tiles[k][2:8, x:x + 6].reshape(-1, 3).mean(0) for k in (2, 0))
+        assert sky[2] - sky[0] > 30 and abs(studio[2] - studio[0]) < 25 and sky.mean() - studio.mean() > 30, (sky, studio)
 
 
 @pytest.mark.parametrize("delay", [0.0, 1.0, 3.0])

@@ -69,55 +69,126 @@ MOUTHS = ({"jawOpen": 0.6}, {"mouthSmileLeft": 0.9, "mouthSmileRight": 0.9, "jaw
           {"jawOpen": 0.35, "mouthStretchLeft": 0.3, "mouthStretchRight": 0.3})
 
 
-def _mouth_face(k: int) -> np.ndarray:
+# what the portraits show, in turn: at rest, a closed smile, a smile with the lips parted
+PORTRAITS: tuple[dict[str, float], ...] = (
+    {}, {"mouthSmileLeft": 0.5, "mouthSmileRight": 0.5, "cheekSquintLeft": 0.2, "cheekSquintRight": 0.2},
+    {"mouthSmileLeft": 0.7, "mouthSmileRight": 0.7, "jawOpen": 0.12, "eyeSquintLeft": 0.2, "eyeSquintRight": 0.2})
+
+
+def _weights(units: dict) -> np.ndarray:
     from synmitsuba.body.expressions import FACE_UNITS
     w = np.zeros(len(FACE_UNITS))
-    for name, x in MOUTHS[k % len(MOUTHS)].items():
+    for name, x in units.items():
         w[FACE_UNITS.index(name)] = x
     return w
 
 
+def _mouth_face(k: int) -> np.ndarray:
+    return _weights(MOUTHS[k % len(MOUTHS)])
+
+
+def _portrait_face(k: int) -> np.ndarray:
+    return _weights(PORTRAITS[k % len(PORTRAITS)])
+
+
+def _portrait_cameras(human, w: int, h: int) -> list:
+    """The face from the front and from three-quarter (40 deg to the subject's left), framed
+    from the crown to the collar, as a portrait photographer frames it."""
+    from synmitsuba.scene.camera import Camera
+    kp = human.keypoints()
+    face, shoulders = kp[1:3].mean(0), kp[5:7].mean(0)
+    target = face + 0.25 * (shoulders - face)
+    cams = []
+    for yaw in (0.0, 40.0):
+        a = np.radians(yaw)
+        eye = target + 0.68 * np.array([np.sin(a), 0.05, np.cos(a)])
+        cams.append(Camera.look_at(eye=tuple(eye), target=tuple(target), fov_y_deg=30, width=w, height=h))
+    return cams
+
+
 @dataclass(frozen=True)
 class Closeup:
-    """A sheet's close-up: its camera for a built subject and size, and the face it wears
-    (ARKit weights for the k-th subject; None: at rest)."""
+    """A sheet's close-up: its cameras for a built subject and size (one tile each), the face
+    it wears (ARKit weights for the k-th subject; None: at rest), and whether the eyes look
+    into each camera (else ahead)."""
 
-    camera: Callable
+    cameras: Callable[..., list]
     face: Callable[[int], np.ndarray | None] = lambda k: None
+    eyes_on_camera: bool = False
 
 
-CLOSEUPS = {"head": Closeup(_closeup_camera), "feet": Closeup(_feet_camera), "mouth": Closeup(_mouth_camera, _mouth_face)}
+def _one(camera: Callable) -> Callable[..., list]:
+    return lambda human, w, h: [camera(human, w, h)]
 
 
-def _subject_in_stage(seed: int, cloth: str = "skinned", face=None):
-    """The sampled subject in the rest pose on a preview stage, wearing ``face`` (ARKit weights
-    or None); with ``cloth`` "simulated" its skirt or dress settled by the cloth stage (the same
-    subject as skinned: the mode draws nothing)."""
+CLOSEUPS = {"head": Closeup(_one(_closeup_camera)), "feet": Closeup(_one(_feet_camera)),
+            "mouth": Closeup(_one(_mouth_camera), _mouth_face),
+            "portrait": Closeup(_portrait_cameras, _portrait_face, eyes_on_camera=True)}
+
+
+def _built_subject(seed: int, cloth: str = "skinned"):
+    """The sampled subject (recipe, built human) and, with ``cloth`` "simulated", its skirt or
+    dress settled in the rest pose by the cloth stage (else None; the same subject either way:
+    the mode draws nothing)."""
     from synmitsuba.body.recipe import sample_subject
     from synmitsuba.body.subject import build_subject
     from synmitsuba.cloth import simulate_cloth
-    from synmitsuba.compose.stage import preview_stage
-    from synmitsuba.motion.motion import Motion
     recipe = sample_subject(np.random.default_rng(seed), {"cloth": cloth})
     human = build_subject(recipe)
-    scene = preview_stage()
+    track = simulate_cloth(human, _rest_motion(human)) if cloth == "simulated" else None
+    return recipe, human, None if track is None else track.at(0)
+
+
+def _rest(human):
     J = len(human.skeleton)
-    rest = Motion(human.skeleton, np.broadcast_to(np.eye(3), (1, J, 3, 3)), np.zeros((1, 3)), 30.0)
-    track = simulate_cloth(human, rest) if cloth == "simulated" else None
-    human.add_to(scene, instance=1, face=face, garments=None if track is None else track.at(0))
-    return recipe, human, scene
+    return np.broadcast_to(np.eye(3), (1, J, 3, 3)).copy(), np.zeros((1, 3))
+
+
+def _rest_motion(human):
+    from synmitsuba.motion.motion import Motion
+    rot, root = _rest(human)
+    return Motion(human.skeleton, rot, root, 30.0)
+
+
+def _stage(env: str | None, seed: int):
+    """The preview stage (sun, sky, grey ground), or the environment ``env`` with its lighting
+    drawn from ``seed`` (an HDRI's scale and rotation)."""
+    from synmitsuba.compose.stage import preview_stage
+    if env is None:
+        return preview_stage()
+    from synmitsuba.compose.environments import add_environment, load_environment, sample_lighting
+    from synmitsuba.scene.scene import Scene
+    environment, rng = load_environment(env, "--env"), np.random.default_rng(seed)
+    scene = Scene()
+    add_environment(scene, environment, sample_lighting(environment, rng), rng)
+    return scene
+
+
+def _place(human, scene, camera=None, face=None, garments=None):
+    """The subject at rest in ``scene`` (moved there if already in), its eyes on ``camera``
+    when one is given."""
+    rot, root = _rest(human)
+    if camera is not None:
+        from synmitsuba.body.eyes import GazeTarget, aim_eyes
+        rot = aim_eyes(human.skeleton, rot, root, GazeTarget("camera", tuple(camera.center)))
+    human.add_to(scene, rot[0], root[0], instance=1, face=face, garments=garments)
 
 
 def turntable(args) -> int:
     import synmitsuba as sm
+    from synmitsuba.compose.backdrop import centre_backdrop
     output_dir(args.out)
     sm.set_variant(args.variant)
-    recipe, human, scene = _subject_in_stage(args.seed, args.cloth)
+    recipe, human, garments = _built_subject(args.seed, args.cloth)
+    scene = _stage(args.env[0] if args.env else None, args.seed)
+    _place(human, scene, garments=garments)
     with open(os.path.join(args.out, "recipe.json"), "w") as fh:
         json.dump(recipe.to_dict(), fh, indent=1, sort_keys=True)
     images = []
     for k in range(args.views):
-        sample = sm.render(scene, _camera(human, 360.0 * k / args.views, *args.res), spp=args.spp, seed=args.seed)
+        cam = _camera(human, 360.0 * k / args.views, *args.res)
+        centre_backdrop(scene, cam.center)
+        sample = sm.render(scene, cam, spp=args.spp, seed=args.seed)
         sm.write_sample(sample, os.path.join(args.out, f"view_{k:02d}"))
         images += [sm.to_srgb8(sample.rgb), LAYER_COLOURS[np.clip(sample.layer, 0, len(LAYER_COLOURS) - 1)]]
     sheet = sm.write_png(os.path.join(args.out, "turntable.png"), sm.contact_sheet(images, columns=2 * min(args.views, 4)))
@@ -127,17 +198,35 @@ def turntable(args) -> int:
 
 def sheet(args) -> int:
     import synmitsuba as sm
-    path = args.out if args.out.endswith(".png") else os.path.join(args.out, "subjects.png")
+    from synmitsuba.compose.backdrop import centre_backdrop
+    from synmitsuba.io.preview import write_image
+    path = args.out if args.out.lower().endswith((".png", ".jpg", ".jpeg")) else os.path.join(args.out, "subjects.png")
     output_file(path)
     sm.set_variant(args.variant)
     images = []
-    view = CLOSEUPS[args.closeup] if args.closeup else None
+    view = CLOSEUPS[args.closeup] if args.closeup else Closeup(lambda human, w, h: [_camera(human, 25.0, w, h)])
     for k in range(args.sheet):
-        _, human, scene = _subject_in_stage(args.seed + k, args.cloth, view.face(k) if view else None)
-        cam = view.camera(human, *args.res) if view else _camera(human, 25.0, *args.res)
-        images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
-    print(sm.write_png(path, sm.contact_sheet(images, columns=min(6 if args.closeup else 8, args.sheet))))
+        _, human, garments = _built_subject(args.seed + k, args.cloth)
+        scene = _stage(args.env[k % len(args.env)] if args.env else None, args.seed + k)
+        for cam in view.cameras(human, *args.res):
+            _place(human, scene, cam if view.eyes_on_camera else None, view.face(k), garments)
+            centre_backdrop(scene, cam.center)
+            images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k, denoise=args.denoise).rgb))
+    columns = 8 if not args.closeup else 4 if len(images) > args.sheet else 6
+    print(write_image(path, sm.contact_sheet(images, columns=min(columns, len(images)))))
     return 0
+
+
+def environment_list(value: str) -> list[str]:
+    """``--env``'s value: environment names, comma-separated (checked before any work)."""
+    import argparse
+    from synmitsuba.compose.environments import environment_names
+    names, known = [n.strip() for n in value.split(",")], environment_names()
+    bad = [n for n in names if n not in known]
+    if bad:
+        raise argparse.ArgumentTypeError(f"{bad[0]!r} is not an environment: give one or more of "
+                                         f"{', '.join(known)}, comma-separated")
+    return names
 
 
 def add_parser(sub) -> None:
@@ -145,7 +234,7 @@ def add_parser(sub) -> None:
                        description="Render a turntable of one sampled layered human: PNG views with layer ids, "
                                    "EXR samples and recipe.json; or, with --sheet K, K subjects in one image.")
     p.add_argument("--seed", type=natural_int, default=0, help="subject seed (with --sheet: the first of K seeds)")
-    p.add_argument("--out", required=True, help="output folder (with --sheet: a .png path or a folder)")
+    p.add_argument("--out", required=True, help="output folder (with --sheet: a .png or .jpg path, or a folder)")
     p.add_argument("--views", type=positive_int, default=6, help="turntable views")
     p.add_argument("--res", type=resolution, default="240x320", help="WIDTHxHEIGHT of each view")
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel")
@@ -154,7 +243,13 @@ def add_parser(sub) -> None:
     p.add_argument("--closeup", nargs="?", const="head", choices=tuple(CLOSEUPS), default=None,
                    help="with --sheet: head and shoulders (default: the whole body; docs/closeups.png is --sheet 12 "
                    "--closeup --res 512x512 --spp 64), with 'feet' both feet (docs/shoes.png), with 'mouth' the "
-                   "mouth open, smiling or speaking (docs/mouths.png)")
+                   "mouth open, smiling or speaking (docs/mouths.png), with 'portrait' the face from the front and from "
+                   "three-quarter, eyes on the camera (docs/portraits.png)")
+    p.add_argument("--env", type=environment_list, default=None,
+                   help="render in this environment (comma-separated: subject k in the k-th, in turn; its lighting "
+                   "drawn from the subject's seed), e.g. hdri_studio,hdri_courtyard (default: the grey preview stage "
+                   "under sun and sky)")
+    p.add_argument("--denoise", choices=("none", "oidn"), default="none", help="with --sheet: denoise each tile (OIDN)")
     p.add_argument("--cloth", choices=("skinned", "simulated"), default="skinned",
                    help="skirts and dresses skinned, or settled by the cloth stage (synmitsuba.cloth)")
     add_variant_option(p)

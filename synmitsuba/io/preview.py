@@ -26,6 +26,17 @@ def write_png(path: str, image: np.ndarray, compress_level: int = 6) -> str:
     return path
 
 
+def write_image(path: str, image: np.ndarray, quality: int = 92) -> str:
+    """``write_png``, or for a ``.jpg``/``.jpeg`` path a JPEG at ``quality`` (a sheet of 24
+    portraits at 512 px: 7.5 MB as PNG, about a sixth of that as JPEG), atomically."""
+    if not os.fspath(path).lower().endswith((".jpg", ".jpeg")):
+        return write_png(path, image)
+    from PIL import Image
+    with atomic_path(os.fspath(path)) as tmp:
+        Image.fromarray(np.ascontiguousarray(image)).convert("RGB").save(tmp, format="JPEG", quality=quality)
+    return os.fspath(path)
+
+
 def contact_sheet(images: list[np.ndarray], columns: int, pad: int = 2) -> np.ndarray:
     """Tile equally sized uint8 images into one (white padding)."""
     h, w = images[0].shape[:2]
