@@ -118,6 +118,7 @@ class Closeup:
 
 
 def _one(camera: Callable) -> Callable[..., list]:
+    """A one-camera close-up's ``cameras``."""
     return lambda human, w, h: [camera(human, w, h)]
 
 
@@ -140,11 +141,13 @@ def _built_subject(seed: int, cloth: str = "skinned"):
 
 
 def _rest(human):
+    """One frame of the rest pose: rotations (1, J, 3, 3), root (1, 3)."""
     J = len(human.skeleton)
     return np.broadcast_to(np.eye(3), (1, J, 3, 3)).copy(), np.zeros((1, 3))
 
 
 def _rest_motion(human):
+    """The rest pose as a one-frame clip (what the cloth stage settles a garment on)."""
     from synmitsuba.motion.motion import Motion
     rot, root = _rest(human)
     return Motion(human.skeleton, rot, root, 30.0)
