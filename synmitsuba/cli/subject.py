@@ -240,7 +240,7 @@ def add_parser(sub) -> None:
                    help="with --sheet: head and shoulders (default: the whole body; docs/closeups.png is --sheet 12 "
                    "--closeup --res 512x512 --spp 64), with 'feet' both feet (docs/shoes.png), with 'mouth' the "
                    "mouth open, smiling or speaking (docs/mouths.png), with 'portrait' the face from the front and from "
-                   "three-quarter, eyes on the camera (docs/portraits.png)")
+                   "three-quarter, eyes on the camera (docs/portraits.jpg)")
     p.add_argument("--env", type=environment_list, default=None,
                    help="render in this environment (comma-separated: subject k in the k-th, in turn; its lighting "
                    "drawn from the subject's seed), e.g. hdri_studio,hdri_courtyard (default: the grey preview stage "
