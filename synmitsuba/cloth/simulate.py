@@ -43,6 +43,8 @@ class ClothSettings:
     contact_stiffness: float = 1.0e4  # against the body: 1e3 let a taut cloth 3 mm into a sphere
     full_contact: bool = True     # the body's edges and faces too, not only its vertices
     max_drift: float = 1.0        # metres a vertex may stray from the skinned garment before it counts as diverged
+    device: str = "cpu"           # Warp's device: "cuda" runs the solver on an NVIDIA GPU (bench/cloth_device.py);
+    # bit-identical results are promised on the CPU only
 
 
 @dataclass
@@ -123,26 +125,31 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
     None when it wears none that the cloth stage simulates. Raises ``ClothError`` naming the
     garment and frame where a simulation goes non-finite or strays ``max_drift`` from the
     skinned garment."""
-    garments = simulated_garments(human)
+    s = settings or ClothSettings()
+    garments, collider = cloth_inputs(human, motion, s)
     if not garments:
         return None
-
-    def at(frame: int) -> tuple[np.ndarray, np.ndarray]:  # (closed body, skinned garments' particles)
-        layers = human.pose(*motion.frame(frame), face=motion.face_at(frame))
-        return human.closed_body(layers), np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
-
-    s = settings or ClothSettings()
-
-    def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
-        return out_of_body(human, body, q, s.particle_radius / 2)
-
-    q = drape([g.piece for g in garments], Collider(human.body.faces, at, motion.fps, motion.n_frames, project), s,
-              names=[g.name for g in garments])
+    q = drape([g.piece for g in garments], collider, s, names=[g.name for g in garments])
     frames, start = {}, 0
     for g in garments:
         frames[g.name] = q[:, start:start + len(g.rows)][:, g.index]
         start += len(g.rows)
     return ClothTrack(frames)
+
+
+def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Collider]:
+    """The subject's simulated garments and the moving body they drape over: the closed body
+    and the skinned garments' particles (where held ones go) per frame of ``motion``."""
+    garments = simulated_garments(human)
+
+    def at(frame: int) -> tuple[np.ndarray, np.ndarray]:  # (closed body, skinned garments' particles)
+        layers = human.pose(*motion.frame(frame), face=motion.face_at(frame))
+        return human.closed_body(layers), np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
+
+    def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
+        return out_of_body(human, body, q, s.particle_radius / 2)
+
+    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project)
 
 
 def out_of_body(human, body: np.ndarray, q: np.ndarray, margin: float) -> np.ndarray:
@@ -167,7 +174,7 @@ def drape(pieces: list[ClothPiece], collider: Collider, settings: ClothSettings 
     import warp as wp
     s = settings or ClothSettings()
     names = names or [f"piece {k}" for k in range(len(pieces))]
-    with wp.ScopedDevice("cpu"):
+    with wp.ScopedDevice(s.device):
         return _run(pieces, collider, s, names)
 
 

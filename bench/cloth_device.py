@@ -1,0 +1,117 @@
+"""The cloth stage on a lent GPU (issue 34's CUDA figures): the same drapes on ``cuda`` as here.
+
+The device machine cannot build subjects (anny does not fit what it carries), so ``pack`` (here)
+records, per clip, what the cloth stage's solver reads: the cloth pieces, the body's faces and,
+per frame, the closed posed body and the skinned garments' particles, stored as float32 and
+replayed as such on both machines; it also drapes each clip on this CPU and keeps the result and
+the seconds. ``run`` (on the device, Warp and Newton carried) drapes each clip on ``cuda`` twice
+(the first run compiles Newton's kernels) and prints, as JSON: seconds per simulated frame (settle
+included), the first clip's seconds, the largest distance of a CUDA vertex from the CPU's, and
+whether the two CUDA runs agree bit for bit.
+
+    python bench/cloth_device.py pack [--subjects 2] [--motions walk,run] [--seconds 1.0]
+    python bench/cloth_device.py run           # on the device (PYTHONPATH with warp, newton)
+"""
+import argparse
+import json
+import lzma
+import os
+import pickle
+import sys
+import time
+from types import SimpleNamespace
+
+import numpy as np
+
+INPUTS = ".device/cloth_inputs.pkl.xz"
+
+
+def pack(args) -> dict:
+    import synmitsuba as sm
+    from synmitsuba.cloth.simulate import cloth_inputs
+    s = sm.ClothSettings()
+    clips = []
+    for i in range(args.subjects):
+        garment = ("skirt", "dress")[i % 2]
+        outfit = ["tshirt", "skirt"] if garment == "skirt" else ["dress"]
+        human = sm.build_subject(sm.sample_subject(np.random.default_rng(100 + i), {
+            "outfit": outfit, "jacket": False, "shoes": True, "cloth": "simulated", "texture_size": 64}))
+        for motion in args.motions.split(","):
+            clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=args.seconds), human.skeleton)
+            garments, collider = cloth_inputs(human, clip, s)
+            frames = [tuple(a.astype(np.float32) for a in collider.at(f)) for f in range(clip.n_frames)]
+            clip_in = {"name": f"subject {i} {garment} {motion}", "pieces": [g.piece for g in garments],
+                       "names": [g.name for g in garments], "faces": human.body.faces, "fps": clip.fps,
+                       "frames": frames, "incidence": human._incidence, "around": human._around}
+            t = time.perf_counter()
+            q = drape_clip(clip_in, s)
+            clip_in["cpu_q"], clip_in["cpu_s"] = q.astype(np.float32), time.perf_counter() - t
+            clips.append(clip_in)
+            print(clip_in["name"], f"{clip_in['cpu_s']:.1f} s on this CPU", file=sys.stderr, flush=True)
+    os.makedirs(os.path.dirname(INPUTS), exist_ok=True)
+    with lzma.open(INPUTS, "wb", preset=6) as f:
+        pickle.dump(clips, f)
+    return {"packed": len(clips), "bytes": os.path.getsize(INPUTS)}
+
+
+def drape_clip(c: dict, s) -> np.ndarray:
+    """The cloth stage's drape of a packed clip under settings ``s``."""
+    from synmitsuba.cloth.simulate import Collider, drape, out_of_body
+    human = SimpleNamespace(body=SimpleNamespace(faces=c["faces"]), _incidence=c["incidence"], _around=c["around"])
+
+    def at(frame: int) -> tuple[np.ndarray, np.ndarray]:
+        body, q = c["frames"][frame]
+        return body.astype(np.float64), q.astype(np.float64)
+
+    def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
+        return out_of_body(human, body, q, s.particle_radius / 2)
+
+    return drape(c["pieces"], Collider(c["faces"], at, c["fps"], len(c["frames"]), project), s, names=c["names"])
+
+
+def run(args) -> dict:
+    import dataclasses
+    import warp as wp
+
+    from synmitsuba.cloth import ClothSettings
+    with lzma.open(INPUTS, "rb") as f:
+        clips = pickle.load(f)
+    s = dataclasses.replace(ClothSettings(), device=args.device)
+    settle = int(round(s.settle_s * clips[0]["fps"]))
+    rows = []
+    for k, c in enumerate(clips):
+        times, qs = [], []
+        for _ in range(2):
+            t = time.perf_counter()
+            qs.append(drape_clip(c, s))
+            times.append(time.perf_counter() - t)
+        n = len(c["frames"]) + settle
+        rows.append({"clip": c["name"], "particles": int(qs[0].shape[1]), "frames": n,
+                     "first_s": round(times[0], 2), "seconds_per_frame": round(times[1] / n, 4),
+                     "cpu_here_seconds_per_frame": round(c["cpu_s"] / n, 4),
+                     "max_dist_from_cpu_m": round(float(np.linalg.norm(qs[1] - c["cpu_q"], axis=2).max()), 4),
+                     "median_dist_from_cpu_m": round(float(np.median(np.linalg.norm(qs[1] - c["cpu_q"], axis=2))), 5),
+                     "runs_identical": bool(np.array_equal(qs[0], qs[1]))})
+        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    dev = wp.get_device(args.device)
+    return {"bench": "cloth_device", "device": f"{args.device}: {dev.name}", "warp": wp.config.version, "clips": rows,
+            "seconds_per_frame_median": float(np.median([r["seconds_per_frame"] for r in rows])),
+            "cpu_here_seconds_per_frame_median": float(np.median([r["cpu_here_seconds_per_frame"] for r in rows[1:] or rows]))}
+    # the first clip packed here compiled Warp's CPU kernels: its CPU seconds are left out
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("what", choices=("pack", "run"))
+    ap.add_argument("--subjects", type=int, default=2)
+    ap.add_argument("--motions", default="walk,run")
+    ap.add_argument("--seconds", type=float, default=1.0)
+    ap.add_argument("--device", default="cuda", help="run: Warp's device (default cuda)")
+    args = ap.parse_args(argv)
+    out = pack(args) if args.what == "pack" else run(args)
+    print(json.dumps(out, indent=1))
+    return out
+
+
+if __name__ == "__main__":
+    main()
