@@ -1265,3 +1265,15 @@ def test_duplicate_accessories_are_distinct_shapes_that_both_render(sm):
     loaded = {shape.id() for shape in cached_build(scene).mi_scene.shapes()}
     assert {"s_watch", "s_watch_2"} <= loaded  # before, the second overwrote the first's vertices
     assert len(scene.meshes["s_watch"].vertices) == len(scene.meshes["s_watch_2"].vertices) > 0
+
+
+def test_accessories_are_worn_as_often_as_in_the_street():
+    """300 random recipes: glasses on about a third of people, a face mask or headphones on few
+    (each kind at 0.22 once put a mask on one in five), never a cap over headphones."""
+    recipes = [sm.sample_subject(np.random.default_rng(5000 + seed)) for seed in range(300)]
+    worn = [{a.kind for a in r.accessories} for r in recipes]
+    share = {k: float(np.mean([k in w for w in worn])) for k in ("glasses", "mask", "headphones", "cap", "backpack")}
+    assert 0.22 <= share["glasses"] <= 0.38, share  # 0.3 +- 3 binomial sd
+    assert share["mask"] <= 0.06 and share["headphones"] <= 0.1 and 0.06 <= share["cap"] <= 0.18, share
+    assert 0.13 <= share["backpack"] <= 0.27, share
+    assert not any({"cap", "headphones"} <= w for w in worn)

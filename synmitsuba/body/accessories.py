@@ -15,7 +15,7 @@ from synmitsuba.geometry import align_vectors, frame, vertex_normals
 from synmitsuba.schema import Choice, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
 
-KINDS = ("glasses", "cap", "headphones", "backpack", "watch", "mask")  # sampled ones, in sampling order
+KINDS = ("glasses", "cap", "headphones", "backpack", "watch", "mask")  # sampled ones, in sampling order (ACCESSORIES' rates)
 BUILDERS_BY_NAME: dict = {}  # kind -> builder, filled below (BUILDERS); read when a recipe is checked
 
 
@@ -27,7 +27,8 @@ class AccessoryParams(Params):
 
 
 def sample_accessories(rng: np.random.Generator) -> list[AccessoryParams]:
-    chosen = [k for k in KINDS if rng.random() < 0.22]
+    """Each kind in ``KINDS`` worn or not, independently at its ``AccessoryKind.rate`` (one draw each)."""
+    chosen = [k for k in KINDS if rng.random() < ACCESSORIES[k].rate]
     if "cap" in chosen and "headphones" in chosen:
         chosen.remove("headphones")
     return [AccessoryParams(k, sample_lab_colour(rng, (10, 80)), round(float(rng.uniform(0.9, 1.1)), 3)) for k in chosen]
@@ -409,16 +410,18 @@ class AccessoryKind:
     it leaves (None: all)."""
 
     build: Callable
-    metallic: float = 0.0
+    rate: float = 0.0      # the share of people sampled wearing it (one in ~3 adults in the street wears glasses,
+    metallic: float = 0.0  # one in ~30 a face mask): every kind at 0.22 put masks and headphones on a fifth of people
     fabric_uv: Callable | None = None
     keeps_hair: Callable | None = None
 
 
 # One entry per kind: a new accessory is one builder and one line here (and, to be sampled, a name in KINDS).
 ACCESSORIES: dict[str, AccessoryKind] = {
-    "glasses": AccessoryKind(_glasses), "cap": AccessoryKind(_cap, keeps_hair=_uncapped),
-    "headphones": AccessoryKind(_headphones), "backpack": AccessoryKind(_backpack),
-    "watch": AccessoryKind(_watch, metallic=0.8), "mask": AccessoryKind(_mask, fabric_uv=mask_uv, keeps_hair=_unmasked),
+    "glasses": AccessoryKind(_glasses, rate=0.3), "cap": AccessoryKind(_cap, rate=0.12, keeps_hair=_uncapped),
+    "headphones": AccessoryKind(_headphones, rate=0.06), "backpack": AccessoryKind(_backpack, rate=0.2),
+    "watch": AccessoryKind(_watch, rate=0.3, metallic=0.8),
+    "mask": AccessoryKind(_mask, rate=0.03, fabric_uv=mask_uv, keeps_hair=_unmasked),
 }
 BUILDERS = BUILDERS_BY_NAME
 BUILDERS.update({kind: a.build for kind, a in ACCESSORIES.items()})
