@@ -15,7 +15,6 @@ from synmitsuba.geometry import align_vectors, frame, vertex_normals
 from synmitsuba.schema import Choice, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
 
-KINDS = ("glasses", "cap", "headphones", "backpack", "watch", "mask")  # sampled ones, in sampling order (ACCESSORIES' rates)
 BUILDERS_BY_NAME: dict = {}  # kind -> builder, filled below (BUILDERS); read when a recipe is checked
 
 
@@ -27,8 +26,8 @@ class AccessoryParams(Params):
 
 
 def sample_accessories(rng: np.random.Generator) -> list[AccessoryParams]:
-    """Each kind in ``KINDS`` worn or not, independently at its ``AccessoryKind.rate`` (one draw each)."""
-    chosen = [k for k in KINDS if rng.random() < ACCESSORIES[k].rate]
+    """Each kind in ``ACCESSORIES`` worn or not, independently at its ``rate`` (one draw each, in order)."""
+    chosen = [k for k, a in ACCESSORIES.items() if rng.random() < a.rate]
     if "cap" in chosen and "headphones" in chosen:
         chosen.remove("headphones")
     return [AccessoryParams(k, sample_lab_colour(rng, (10, 80)), round(float(rng.uniform(0.9, 1.1)), 3)) for k in chosen]
@@ -410,13 +409,15 @@ class AccessoryKind:
     it leaves (None: all)."""
 
     build: Callable
-    rate: float = 0.0      # the share of people sampled wearing it (one in ~3 adults in the street wears glasses,
-    metallic: float = 0.0  # one in ~30 a face mask): every kind at 0.22 put masks and headphones on a fifth of people
+    # the share of people sampled wearing it (one in ~3 adults in the street wears glasses, one in ~30
+    # a face mask): every kind at 0.22 put masks and headphones on a fifth of people
+    rate: float = 0.0
+    metallic: float = 0.0
     fabric_uv: Callable | None = None
     keeps_hair: Callable | None = None
 
 
-# One entry per kind: a new accessory is one builder and one line here (and, to be sampled, a name in KINDS).
+# One entry per kind, in sampling order: a new accessory is one builder and one line here (a rate 0 is never drawn).
 ACCESSORIES: dict[str, AccessoryKind] = {
     "glasses": AccessoryKind(_glasses, rate=0.3), "cap": AccessoryKind(_cap, rate=0.12, keeps_hair=_uncapped),
     "headphones": AccessoryKind(_headphones, rate=0.06), "backpack": AccessoryKind(_backpack, rate=0.2),
