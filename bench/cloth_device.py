@@ -10,7 +10,14 @@ included), the first clip's seconds, the largest distance of a CUDA vertex from 
 whether the two CUDA runs agree bit for bit.
 
     python bench/cloth_device.py pack [--subjects 2] [--motions walk,run] [--seconds 1.0]
+    python bench/cloth_device.py warm [--arch 90]   # here: Newton's CUDA kernels, compiled ahead
     python bench/cloth_device.py run           # on the device (PYTHONPATH with warp, newton)
+
+``warm`` exists because NVRTC needs over 8 minutes for Newton's modules on a cold cache, more
+than a lent machine's budget: it drapes a few frames of each packed clip on this CPU and, each
+time Warp loads a module (so with the same kernels and overloads, hence the same module hash, as
+the CUDA run will have), compiles that module for ``sm_<arch>`` CUBIN into ``CACHE``; ``run``
+reads its kernels from there.
 """
 import argparse
 import json
@@ -24,6 +31,7 @@ from types import SimpleNamespace
 import numpy as np
 
 INPUTS = ".device/cloth_inputs.pkl.xz"
+CACHE = ".device/warpcache"  # carried to the device beside INPUTS
 
 
 def pack(args) -> dict:
@@ -69,9 +77,46 @@ def drape_clip(c: dict, s) -> np.ndarray:
     return drape(c["pieces"], Collider(c["faces"], at, c["fps"], len(c["frames"]), project), s, names=c["names"])
 
 
+def warm(args) -> dict:
+    """Compile, here, the CUDA binary of every Warp module a drape loads (see the module doc)."""
+    import warp as wp
+    wp.config.kernel_cache_dir = os.path.abspath(CACHE)
+    wp.init()
+    from warp._src.context import Module
+
+    from synmitsuba.cloth import ClothSettings
+    load, done, rows = Module.load, set(), []
+
+    def load_and_compile(self, device, *a, **k):
+        out = load(self, device, *a, **k)
+        name = self.get_module_identifier()
+        if name not in done:
+            done.add(name)
+            t = time.perf_counter()
+            try:
+                wp.compile_aot_module(self, arch=args.arch, use_ptx=False)
+            except RuntimeError as e:  # a module of generic kernels with no overload yet
+                print(name, "skipped:", e, file=sys.stderr)
+            rows.append({"module": name, "compile_s": round(time.perf_counter() - t, 1)})
+            print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+        return out
+
+    Module.load = load_and_compile
+    with lzma.open(INPUTS, "rb") as f:
+        clips = pickle.load(f)
+    s = ClothSettings()
+    for c in clips:
+        drape_clip(dict(c, frames=c["frames"][:args.frames]), s)
+    Module.load = load
+    return {"warmed": rows, "arch": args.arch, "cache": CACHE}
+
+
 def run(args) -> dict:
     import dataclasses
     import warp as wp
+    if os.path.isdir(CACHE):  # warmed here: the CUBINs compiled ahead
+        wp.config.kernel_cache_dir = os.path.abspath(CACHE)
+        wp.config.cuda_output = "cubin"
 
     from synmitsuba.cloth import ClothSettings
     with lzma.open(INPUTS, "rb") as f:
@@ -102,13 +147,15 @@ def run(args) -> dict:
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=("pack", "run"))
+    ap.add_argument("what", choices=("pack", "warm", "run"))
     ap.add_argument("--subjects", type=int, default=2)
     ap.add_argument("--motions", default="walk,run")
     ap.add_argument("--seconds", type=float, default=1.0)
     ap.add_argument("--device", default="cuda", help="run: Warp's device (default cuda)")
+    ap.add_argument("--arch", type=int, default=90, help="warm: the CUDA arch to compile for (90: H100, H200)")
+    ap.add_argument("--frames", type=int, default=3, help="warm: frames of each clip to drape")
     args = ap.parse_args(argv)
-    out = pack(args) if args.what == "pack" else run(args)
+    out = {"pack": pack, "warm": warm, "run": run}[args.what](args)
     print(json.dumps(out, indent=1))
     return out
 

@@ -1277,3 +1277,26 @@ def test_accessories_are_worn_as_often_as_in_the_street():
     assert share["mask"] <= 0.06 and share["headphones"] <= 0.1 and 0.06 <= share["cap"] <= 0.18, share
     assert 0.13 <= share["backpack"] <= 0.27, share
     assert not any({"cap", "headphones"} <= w for w in worn)
+    frames = [a.frame for r in recipes for a in r.accessories if a.kind == "glasses"]
+    assert None not in frames and "round" not in frames and len(set(frames)) >= 4, frames  # the old loud ring is kept for old recipes only
+
+
+def test_every_glasses_frame_leaves_the_eyes_open():
+    """Each frame built on one head, measured in the head's frame: its rims are tubes of the
+    frame's radius (front depth 2 x rim), centred on the eyes, and no rim vertex comes within
+    10 mm of an eye centre in the lens plane (an iris, ~6 mm in radius, shows whole), so thin
+    and thick frames alike leave the eyes to a detector."""
+    from synmitsuba.body.accessories import GLASSES_FRAMES, AccessoryParams, build_accessory
+    from synmitsuba.geometry import frame
+    h = sm.build_subject(sm.sample_subject(np.random.default_rng(7), {"accessories": [], "texture_size": 64}))
+    R = frame(h.head.forward, h.head.up)
+    eyes = (h.keypoints()[[1, 2]] - h.head.centre) @ R
+    for name, fr in GLASSES_FRAMES.items():
+        v, _ = build_accessory(AccessoryParams("glasses", frame=name), h.body, h.head)
+        local = (v - h.head.centre) @ R
+        front = local[local[:, 2] > local[:, 2].max() - 2.2 * fr.rim]
+        assert np.ptp(front[:, 2]) == pytest.approx(2 * fr.rim, rel=0.1), name
+        for eye in eyes:
+            rim = front[np.abs(front[:, 0] - eye[0]) < 0.03]
+            assert abs(rim[:, 1].mean() - eye[1]) < 0.003, name
+            assert np.hypot(*(front[:, :2] - eye[:2]).T).min() > 0.010, name

@@ -18,11 +18,57 @@ from synmitsuba.scene.layers import Layer
 BUILDERS_BY_NAME: dict = {}  # kind -> builder, filled below (BUILDERS); read when a recipe is checked
 
 
+@dataclass(frozen=True)
+class GlassesFrame:
+    """A glasses frame: each lens's half width and half height (m, at scale 1), its rim's
+    ``squareness`` (the superellipse exponent: 2 an ellipse, 4 a rounded rectangle), the rim
+    tube's radius, whether it is metal (drawn in metal colours, rendered metallic) and its share
+    among people wearing glasses (0: never drawn)."""
+
+    half_width: float
+    half_height: float
+    squareness: float
+    rim: float
+    metal: bool = False
+    share: float = 0.0
+
+
+# Lenses are wider than tall and most rims are thin: the first frame ("round", kept for recipes
+# without one) was a 44 mm circle in a 5 mm tube, loud enough to hide the iris from a detector.
+GLASSES_FRAMES: dict[str, GlassesFrame] = {
+    "round": GlassesFrame(0.022, 0.022, 2.0, 0.0025),
+    "wire_oval": GlassesFrame(0.024, 0.017, 2.4, 0.0009, metal=True, share=0.3),
+    "wire_round": GlassesFrame(0.020, 0.019, 2.0, 0.0009, metal=True, share=0.15),
+    "acetate_rectangle": GlassesFrame(0.025, 0.017, 4.0, 0.0018, share=0.35),
+    "acetate_soft": GlassesFrame(0.024, 0.019, 3.0, 0.0022, share=0.2),
+}
+# (L*, a*, b*) of frames: metal ones silver, gunmetal, black, gold, rose gold; plastic (acetate)
+# ones mostly dark: black, two tortoiseshell browns, navy, burgundy, grey
+METAL_LAB = ((78.0, 0.0, 1.0), (38.0, 0.0, -2.0), (16.0, 0.0, 0.0), (72.0, 4.0, 38.0), (70.0, 14.0, 16.0))
+ACETATE_LAB = ((12.0, 0.0, 0.0), (12.0, 0.0, 0.0), (28.0, 10.0, 18.0), (38.0, 14.0, 28.0), (22.0, 3.0, -20.0),
+               (25.0, 25.0, 8.0), (55.0, 0.0, 0.0))
+
+
 @dataclass
 class AccessoryParams(Params):
     kind: str = spec("glasses", Choice(BUILDERS_BY_NAME))
     colour_lab: list | None = spec(None, optional(LAB))
     scale: float = spec(1.0, Number(0.8, 1.25))
+    frame: str | None = spec(None, optional(Choice(GLASSES_FRAMES)))  # glasses only; None: "round"
+
+
+def sample_glasses_frames(rng: np.random.Generator, accessories: list[AccessoryParams]) -> None:
+    """Give each pair of glasses a frame from ``GLASSES_FRAMES`` (by share) and a frame's colour
+    (``METAL_LAB`` or ``ACETATE_LAB``, jittered). Called after every other draw of a subject, so the people without glasses, and
+    everything else about those with them, stay as they were drawn before frames existed."""
+    names = [k for k, f in GLASSES_FRAMES.items() if f.share > 0]
+    share = np.array([GLASSES_FRAMES[k].share for k in names])
+    for a in accessories:
+        if a.kind == "glasses":
+            a.frame = names[int(rng.choice(len(names), p=share / share.sum()))]
+            palette = METAL_LAB if GLASSES_FRAMES[a.frame].metal else ACETATE_LAB
+            lab = np.array(palette[int(rng.integers(len(palette)))]) + rng.normal(0, 2, 3)
+            a.colour_lab = [round(float(x), 3) for x in np.clip(lab, [0, -128, -128], [100, 128, 128])]
 
 
 def sample_accessories(rng: np.random.Generator) -> list[AccessoryParams]:
@@ -60,43 +106,74 @@ def _local(head: HeadFrame):
 
 
 def _glasses(p: AccessoryParams, body, head):
-    """Two rims in front of the eyes (anny's eye keypoints), a bridge, end pieces and temples
-    running back past the sides of the head to the ears; the frame's plane is where the rims
-    clear the face by 6 mm and the bridge the nose by 4 mm: it rests on the face, not in it."""
+    """Two rims of the recipe's ``GLASSES_FRAMES`` shape in front of the eyes (anny's eye
+    keypoints), a bridge, end pieces and temples running back from the rims' upper outer corners
+    past the sides of the head to the ears; the frame's plane is where the rims clear the face by 3.5 mm and the bridge the nose
+    by 4 mm: it rests on the face, not in it."""
     import trimesh
+    fr = GLASSES_FRAMES[p.frame or "round"]
     R, c = _local(head)
     face = (body.vertices[head.mask] - c) @ R
     eyes, ears = (head.eyes - c) @ R, (head.ears - c) @ R
-    mid, half, r = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2, 0.022 * p.scale
-    ring_path = np.zeros(len(face), bool)  # face points under the rims' tube (the lenses are open)
+    mid, half = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2
+    a = min(fr.half_width * p.scale, half - fr.rim - 0.004)  # a narrow face keeps a bridge
+    b, t = fr.half_height * p.scale * a / (fr.half_width * p.scale), fr.rim
+    curve = _superellipse(a, b, fr.squareness)
+    near = np.zeros(len(face), bool)  # face points under the rims' tube (the lenses are open)
     for x in (-1, 1):
-        ring_path |= np.abs(np.hypot(face[:, 0] - mid[0] - x * half, face[:, 1] - mid[1]) - r) < 0.005
+        d = np.linalg.norm(face[:, None, :2] - (curve + [mid[0] + x * half, mid[1]])[None], axis=2).min(1)
+        near |= d < t + 0.0025
     bridge = (np.abs(face[:, 0] - mid[0]) < 0.008) & (np.abs(face[:, 1] - mid[1] - 0.004) < 0.004)
-    z = max(face[ring_path, 2].max() + 0.006, face[bridge, 2].max() + 0.004)
-    back = ears[:, 2].mean() - 0.005
-    parts = [trimesh.creation.box([2 * (half - r) + 0.006, 0.004, 0.004])]  # the bridge
-    parts[0].apply_translation([mid[0], mid[1] + 0.004, z])
+    z = max(face[near, 2].max() + t + 0.0035, face[bridge, 2].max() + 0.004)
+    back, y = ears[:, 2].mean() - 0.005, mid[1] + 0.5 * b  # temples at the rims' upper corners
+    parts = [trimesh.creation.box([2 * (half - a) + 2 * t, 1.6 * t, 1.6 * t])]  # the bridge
+    parts[0].apply_translation([mid[0], mid[1] + 0.3 * b, z])
     for x in (-1, 1):
-        ring = trimesh.creation.torus(r, 0.0025, major_sections=24, minor_sections=6)
-        ring.apply_translation([mid[0] + x * half, mid[1], z])
-        path = _temple(face, mid, x, z, back)  # along the side of the head, 4 mm off it
-        points = [[mid[0] + x * (half + r), mid[1], z]] + [[mid[0] + x * w, mid[1], zk] for w, zk in path]
-        parts += [ring] + [trimesh.creation.cylinder(0.002, segment=[a, b], sections=6)
-                           for a, b in zip(points[:-1], points[1:])]
+        parts.append(_rim(curve + [mid[0] + x * half, mid[1]], z, t))
+        edge = np.abs(curve[:, 0])[curve[:, 1] >= 0.5 * b].max()  # the rim's outer edge at the temple's height
+        path = _temple(face, mid[0], y, x, z, back, half + edge)  # along the side of the head, 4 mm off it
+        points = [[mid[0] + x * (half + edge), y, z]] + [[mid[0] + x * w, y, zk] for w, zk in path]
+        parts += [trimesh.creation.cylinder(max(0.8 * t, 0.0012), segment=[p0, p1], sections=6)
+                  for p0, p1 in zip(points[:-1], points[1:])]
     return _place(trimesh.util.concatenate(parts), R, c)
 
 
-def _temple(face: np.ndarray, mid: np.ndarray, x: int, front: float, back: float, steps: int = 6) -> list:
-    """(half-width, z) points of one temple from the frame back to the ear: at each depth the
-    head's widest point at eye height on that side, plus 4 mm, never narrower than the step
-    before (a temple runs straight or outward; it does not bend into the head)."""
-    side = (face[:, 0] - mid[0]) * x > 0
-    level = np.abs(face[:, 1] - mid[1]) < 0.015
-    out, width = [], 0.0
+def _superellipse(a: float, b: float, n: float, k: int = 64) -> np.ndarray:
+    """(k, 2) points, counter-clockwise, of |x/a|^n + |y/b|^n = 1."""
+    s = np.linspace(0, 2 * np.pi, k, endpoint=False)
+    c, si = np.cos(s), np.sin(s)
+    return np.stack([a * np.sign(c) * np.abs(c) ** (2 / n), b * np.sign(si) * np.abs(si) ** (2 / n)], 1)
+
+
+def _rim(curve: np.ndarray, z: float, radius: float, around: int = 8):
+    """A closed tube of ``radius`` along a closed counter-clockwise ``curve`` in the plane at ``z``."""
+    import trimesh
+    tangent = np.roll(curve, -1, 0) - np.roll(curve, 1, 0)
+    out = np.stack([tangent[:, 1], -tangent[:, 0]], 1) / np.linalg.norm(tangent, axis=1, keepdims=True)
+    phi = np.linspace(0, 2 * np.pi, around, endpoint=False)
+    ring = curve[:, None] + radius * np.cos(phi)[None, :, None] * out[:, None]
+    v = np.concatenate([ring, z + radius * np.broadcast_to(np.sin(phi), ring.shape[:2])[..., None]], 2)
+    k = len(curve)
+    i, j = np.meshgrid(np.arange(k), np.arange(around), indexing="ij")
+    a, b = i * around + j, i * around + (j + 1) % around
+    c, d = (i + 1) % k * around + j, (i + 1) % k * around + (j + 1) % around
+    f = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3), np.stack([b, c, d], -1).reshape(-1, 3)])
+    return trimesh.Trimesh(v.reshape(-1, 3), f, process=False)
+
+
+def _temple(face: np.ndarray, mid_x: float, y: float, x: int, front: float, back: float, start: float,
+            steps: int = 6) -> list:
+    """(half-width, z) points of one temple from the frame (half-width ``start``) back to the ear:
+    at each depth the head's widest point at the temple's height ``y`` on that side, plus 4 mm,
+    never narrower than the step before (a temple runs straight or outward; it does not bend
+    into the head)."""
+    side = (face[:, 0] - mid_x) * x > 0
+    level = np.abs(face[:, 1] - y) < 0.015
+    out, width = [], start
     for zk in np.linspace(front, back, steps):
         near = side & level & (np.abs(face[:, 2] - zk) < 0.012)
         if near.any():
-            width = max(width, np.abs(face[near, 0] - mid[0]).max() + 0.004)
+            width = max(width, np.abs(face[near, 0] - mid_x).max() + 0.004)
         out.append((width, zk))
     return out
 
@@ -415,11 +492,13 @@ class AccessoryKind:
     metallic: float = 0.0
     fabric_uv: Callable | None = None
     keeps_hair: Callable | None = None
+    metallic_of: Callable | None = None  # params -> metallic, where it depends on them (None: ``metallic``)
 
 
 # One entry per kind, in sampling order: a new accessory is one builder and one line here (a rate 0 is never drawn).
 ACCESSORIES: dict[str, AccessoryKind] = {
-    "glasses": AccessoryKind(_glasses, rate=0.3), "cap": AccessoryKind(_cap, rate=0.12, keeps_hair=_uncapped),
+    "glasses": AccessoryKind(_glasses, rate=0.3, metallic_of=lambda p: 0.9 * GLASSES_FRAMES[p.frame or "round"].metal),
+    "cap": AccessoryKind(_cap, rate=0.12, keeps_hair=_uncapped),
     "headphones": AccessoryKind(_headphones, rate=0.06), "backpack": AccessoryKind(_backpack, rate=0.2),
     "watch": AccessoryKind(_watch, rate=0.3, metallic=0.8),
     "mask": AccessoryKind(_mask, rate=0.03, fabric_uv=mask_uv, keeps_hair=_unmasked),

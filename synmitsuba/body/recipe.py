@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_accessories
+from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_accessories, sample_glasses_frames
 from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES, height_for_stature, measures, shape_calibration
 from synmitsuba.body.brows import BrowParams, sample_brows
 from synmitsuba.body.eyes import EyeParams, sample_eyes
@@ -195,6 +195,7 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     eyes = sample_eyes(rng, skin.ita_deg, hair.melanin)  # drawn last: earlier draws stay as they were
     brows = sample_brows(rng, pheno["gender"] >= 0.5)
     skin.under_eye, skin.pores = round(float(rng.uniform(0.0, 0.8)), 3), round(float(rng.uniform(0.3, 1.0)), 3)
+    sample_glasses_frames(rng, accessories)  # drawn last, for glasses wearers only
     recipe = SubjectRecipe(phenotypes=pheno, skin=skin, garments=garments, hair=hair, accessories=accessories,
                            eyes=eyes, brows=brows, texture_size=cfg.texture_size, cloth=cfg.cloth)
     return SubjectRecipe.from_dict(json.loads(recipe.to_json()))  # normalised exactly as it will be read back

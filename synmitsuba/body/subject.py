@@ -265,7 +265,8 @@ class LayeredHuman:
             _, near = tree.query(v)
             colour = lab_to_linear_rgb(p.colour_lab) if p.colour_lab else (0.1, 0.1, 0.1)
             kind = acc.ACCESSORIES[p.kind]
-            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4, metallic=kind.metallic)
+            metallic = kind.metallic if kind.metallic_of is None else float(kind.metallic_of(p))
+            mat = Material(base_color=tuple(colour), kind="principled", roughness=0.4, metallic=metallic)
             uv = None
             if kind.fabric_uv is not None:  # matte cloth with a plain weave at thread size
                 uv, metres = kind.fabric_uv(self.head, v)
