@@ -39,8 +39,8 @@ GLASSES_FRAMES: dict[str, GlassesFrame] = {
     "round": GlassesFrame(0.022, 0.022, 2.0, 0.0025),
     "wire_oval": GlassesFrame(0.024, 0.017, 2.4, 0.0009, metal=True, share=0.3),
     "wire_round": GlassesFrame(0.020, 0.019, 2.0, 0.0009, metal=True, share=0.15),
-    "acetate_rectangle": GlassesFrame(0.025, 0.017, 4.0, 0.0018, share=0.35),
-    "acetate_soft": GlassesFrame(0.024, 0.019, 3.0, 0.0022, share=0.2),
+    "acetate_rectangle": GlassesFrame(0.025, 0.017, 4.0, 0.0014, share=0.35),
+    "acetate_soft": GlassesFrame(0.024, 0.019, 3.0, 0.0014, share=0.2),
 }
 # (L*, a*, b*) of frames: metal ones silver, gunmetal, black, gold, rose gold; plastic (acetate)
 # ones mostly dark: black, two tortoiseshell browns, navy, burgundy, grey
