@@ -17,7 +17,10 @@ whether the two CUDA runs agree bit for bit.
 than a lent machine's budget: it drapes a few frames of each packed clip on this CPU and, each
 time Warp loads a module (so with the same kernels and overloads, hence the same module hash, as
 the CUDA run will have), compiles that module for ``sm_<arch>`` CUBIN into ``CACHE``; ``run``
-reads its kernels from there.
+reads its kernels from there. Its limit (measured on an H100, bench/RESULTS.md): Newton picks
+some launch block sizes by device (its SDF contact kernels take 128 threads on CUDA, 256 on a
+CPU; VBD's rigid blocks follow the GPU's SM count), and a module's hash includes its block size,
+so those modules miss the cache and still compile there.
 """
 import argparse
 import json
@@ -124,7 +127,7 @@ def run(args) -> dict:
     s = dataclasses.replace(ClothSettings(), device=args.device)
     settle = int(round(s.settle_s * clips[0]["fps"]))
     rows = []
-    for k, c in enumerate(clips):
+    for k, c in enumerate(clips[:args.clips]):
         times, qs = [], []
         for _ in range(2):
             t = time.perf_counter()
@@ -154,6 +157,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--device", default="cuda", help="run: Warp's device (default cuda)")
     ap.add_argument("--arch", type=int, default=90, help="warm: the CUDA arch to compile for (90: H100, H200)")
     ap.add_argument("--frames", type=int, default=3, help="warm: frames of each clip to drape")
+    ap.add_argument("--clips", type=int, default=None, help="run: the first N packed clips only")
     args = ap.parse_args(argv)
     out = {"pack": pack, "warm": warm, "run": run}[args.what](args)
     print(json.dumps(out, indent=1))
