@@ -43,6 +43,10 @@ class ClothSettings:
     contact_stiffness: float = 1.0e4  # against the body: 1e3 let a taut cloth 3 mm into a sphere
     full_contact: bool = True     # the body's edges and faces too, not only its vertices
     max_drift: float = 1.0        # metres a vertex may stray from the skinned garment before it counts as diverged
+    # cloth against itself and the other simulated pieces (Newton VBD's self-contact); off by default:
+    # on a skirt over a walk it fought the body's contacts (a vertex 8.8 mm into the body, then a leg through)
+    self_contact: bool = False
+    self_contact_margin: float = 0.003  # metres at which two pieces of cloth start to push apart
     device: str = "cpu"           # Warp's device: "cuda" runs the solver on an NVIDIA GPU (bench/cloth_device.py);
     # bit-identical results are promised on the CPU only
 
@@ -213,7 +217,9 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     import newton
     body0, q0 = collider.at(0)
     model, mesh, held = _model(pieces, collider.faces, body0, q0, s)
-    solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations)
+    solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
+                                      particle_self_contact_margin=s.self_contact_margin,
+                                      particle_self_contact_gap=s.self_contact_margin / 2)
     s0, s1, control = model.state(), model.state(), model.control()
     pipeline = newton.CollisionPipeline(model, soft_contact_gap=s.contact_gap,
                                         enable_rigid_soft_full_surface_contact=s.full_contact)
