@@ -104,13 +104,15 @@ def warm(args) -> dict:
             print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
         return out
 
-    Module.load = load_and_compile
     with lzma.open(INPUTS, "rb") as f:
         clips = pickle.load(f)
     s = ClothSettings()
-    for c in clips:
-        drape_clip(dict(c, frames=c["frames"][:args.frames]), s)
-    Module.load = load
+    Module.load = load_and_compile
+    try:
+        for c in clips:
+            drape_clip(dict(c, frames=c["frames"][:args.frames]), s)
+    finally:
+        Module.load = load
     return {"warmed": rows, "arch": args.arch, "cache": CACHE}
 
 

@@ -117,7 +117,7 @@ def _glasses(p: AccessoryParams, body, head):
     eyes, ears = (head.eyes - c) @ R, (head.ears - c) @ R
     mid, half = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2
     a = min(fr.half_width * p.scale, half - fr.rim - 0.004)  # a narrow face keeps a bridge
-    b, t = fr.half_height * p.scale * a / (fr.half_width * p.scale), fr.rim
+    b, t = fr.half_height * a / fr.half_width, fr.rim  # a narrowed lens keeps its proportions
     curve = _superellipse(a, b, fr.squareness)
     near = np.zeros(len(face), bool)  # face points under the rims' tube (the lenses are open)
     for x in (-1, 1):
