@@ -124,7 +124,8 @@ def main(argv=None) -> dict:
         out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=args.base).stdout
         result["base"] = json.loads(out.strip().splitlines()[-1])["this"]
         b, t = result["base"], result["this"]
-        result["ratio"] = {k: round(t[k] / b[k], 3) for k in ("build_s_median", "frame_512_64spp_s_median")}
+        result["ratio"] = {k: round(t[k] / b[k], 3) for k in ("build_s_median", "frame_512_64spp_s_median")
+                           if t[k] is not None and b[k]}  # --timed 0 times no frame
         result["build_s_added"] = round(t["build_s_median"] - b["build_s_median"], 3)
     print(json.dumps(result))
     return result
