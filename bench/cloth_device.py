@@ -11,16 +11,16 @@ whether the two CUDA runs agree bit for bit.
 
     python bench/cloth_device.py pack [--subjects 2] [--motions walk,run] [--seconds 1.0]
     python bench/cloth_device.py warm [--arch 90]   # here: Newton's CUDA kernels, compiled ahead
-    python bench/cloth_device.py run           # on the device (PYTHONPATH with warp, newton)
+    python bench/cloth_device.py run [--precompile] [--cache DIR] [--vertex-contact]
+                                               # on the device (PYTHONPATH with warp, newton, trimesh)
 
-``warm`` exists because NVRTC needs over 8 minutes for Newton's modules on a cold cache, more
-than a lent machine's budget: it drapes a few frames of each packed clip on this CPU and, each
-time Warp loads a module (so with the same kernels and overloads, hence the same module hash, as
-the CUDA run will have), compiles that module for ``sm_<arch>`` CUBIN into ``CACHE``; ``run``
-reads its kernels from there. Its limit (measured on an H100, bench/RESULTS.md): Newton picks
-some launch block sizes by device (its SDF contact kernels take 128 threads on CUDA, 256 on a
-CPU; VBD's rigid blocks follow the GPU's SM count), and a module's hash includes its block size,
-so those modules miss the cache and still compile there.
+``run --precompile`` is how a lent machine gets through NVRTC: a dry run finds every module a
+drape loads on CUDA (with the device's own launch block sizes, which a CPU cannot reproduce:
+Newton's SDF contact kernels take 128 threads on CUDA, its tiled cloth solve exists there only),
+then 16 threads compile them at once (Newton's full-surface contacts: 468 s on an H200, against
+720 s one after another), then the drapes run. ``--cache`` puts the CUBINs where later calls find
+them. ``warm`` (here) compiles for ``sm_<arch>`` the modules a CPU drape loads; only the
+device-independent ones match the CUDA run's (bench/RESULTS.md).
 """
 import argparse
 import json
@@ -116,25 +116,88 @@ def warm(args) -> dict:
     return {"warmed": rows, "arch": args.arch, "cache": CACHE}
 
 
+def precompile(clips: list, s, frames: int = 3, workers: int = 16, passthrough=lambda module: False) -> dict:
+    """Compile, in parallel, every module variant a drape of ``clips`` loads on ``s.device``.
+
+    NVRTC compiles one module at a time as a drape first launches it (Newton's take 8+ minutes
+    in a row). A dry run finds them first: while it drapes a few frames, each load of a module on
+    the target device is recorded (module, block size, hash) and answered with nothing, which
+    makes Warp skip the launch; then the variants whose hash is still the module's are compiled
+    by ``workers`` threads (NVRTC runs outside the GIL), and the real drape finds them cached.
+    Variants a later overload made stale (their module changed during the dry run) are counted
+    and left to compile in the real run. ``passthrough(module)`` true: load it for real (a test on
+    the CPU passes Warp's own modules, graph colouring among them)."""
+    import dataclasses
+    import warp as wp
+    from warp._src.context import Module
+    target = wp.get_device(s.device)
+    load, seen = Module.load, {}
+
+    def record(self, device, block_dim=None, *a, **k):
+        if wp.get_device(device) != target or passthrough(self):
+            return load(self, device, block_dim, *a, **k)
+        seen.setdefault((self.name, block_dim, self.get_module_hash(block_dim)), (self, block_dim))
+        return None  # Warp's launch returns without running the kernel
+
+    t = time.perf_counter()
+    dry = dataclasses.replace(s, max_drift=float("inf"))
+    Module.load = record
+    try:
+        for c in clips:
+            try:
+                drape_clip(dict(c, frames=c["frames"][:frames]), dry)
+            except Exception as e:  # the kernels did not run: what was recorded still counts
+                print("dry run stopped:", repr(e)[:200], file=sys.stderr, flush=True)
+    finally:
+        Module.load = load
+    dry_s = time.perf_counter() - t
+    current = {k: v for k, v in seen.items() if v[0].get_module_hash(v[1]) == k[2]}
+
+    def compile_one(item):
+        module, block_dim = item
+        t0 = time.perf_counter()
+        load(module, target, block_dim)
+        return {"module": module.name, "block_dim": block_dim, "s": round(time.perf_counter() - t0, 1)}
+
+    from concurrent.futures import ThreadPoolExecutor
+    t = time.perf_counter()
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        rows = []
+        for r in pool.map(compile_one, current.values()):
+            rows.append(r)
+            print(json.dumps(r), file=sys.stderr, flush=True)
+    return {"dry_run_s": round(dry_s, 1), "variants": len(seen), "stale": len(seen) - len(current),
+            "parallel_compile_s": round(time.perf_counter() - t, 1), "modules": rows}
+
+
 def run(args) -> dict:
     import dataclasses
     import warp as wp
-    if os.path.isdir(CACHE):  # warmed here: the CUBINs compiled ahead
-        wp.config.kernel_cache_dir = os.path.abspath(CACHE)
+    cache = args.cache or (CACHE if os.path.isdir(CACHE) else None)
+    if cache:  # warmed ahead: CUBINs found there, new ones written there
+        wp.config.kernel_cache_dir = os.path.abspath(cache)
         wp.config.cuda_output = "cubin"
 
-    from synmitsuba.cloth import ClothSettings
+    from synmitsuba.cloth import ClothError, ClothSettings
     with lzma.open(INPUTS, "rb") as f:
         clips = pickle.load(f)
-    s = dataclasses.replace(ClothSettings(), device=args.device)
+    s = dataclasses.replace(ClothSettings(), device=args.device, full_contact=not args.vertex_contact)
+    compiled = precompile(clips, s, workers=args.workers) if args.precompile else None
+    if compiled:
+        print(json.dumps({k: v for k, v in compiled.items() if k != "modules"}), file=sys.stderr, flush=True)
     settle = int(round(s.settle_s * clips[0]["fps"]))
     rows = []
     for k, c in enumerate(clips[:args.clips]):
         times, qs = [], []
-        for _ in range(2):
-            t = time.perf_counter()
-            qs.append(drape_clip(c, s))
-            times.append(time.perf_counter() - t)
+        try:
+            for _ in range(2):
+                t = time.perf_counter()
+                qs.append(drape_clip(c, s))
+                times.append(time.perf_counter() - t)
+        except ClothError as e:  # the other clips still count
+            rows.append({"clip": c["name"], "diverged": str(e)})
+            print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+            continue
         n = len(c["frames"]) + settle
         rows.append({"clip": c["name"], "particles": int(qs[0].shape[1]), "frames": n,
                      "first_s": round(times[0], 2), "seconds_per_frame": round(times[1] / n, 4),
@@ -144,9 +207,12 @@ def run(args) -> dict:
                      "runs_identical": bool(np.array_equal(qs[0], qs[1]))})
         print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
     dev = wp.get_device(args.device)
-    return {"bench": "cloth_device", "device": f"{args.device}: {dev.name}", "warp": wp.config.version, "clips": rows,
-            "seconds_per_frame_median": float(np.median([r["seconds_per_frame"] for r in rows])),
-            "cpu_here_seconds_per_frame_median": float(np.median([r["cpu_here_seconds_per_frame"] for r in rows[1:] or rows]))}
+    done = [r for r in rows if "diverged" not in r]
+    return {"bench": "cloth_device", "device": f"{args.device}: {dev.name}", "warp": wp.config.version,
+            "full_contact": s.full_contact, "precompiled": compiled, "clips": rows,
+            "seconds_per_frame_median": float(np.median([r["seconds_per_frame"] for r in done])) if done else None,
+            "cpu_here_seconds_per_frame_median": float(np.median([r["cpu_here_seconds_per_frame"] for r in done[1:] or done]))
+            if done else None}
     # the first clip packed here compiled Warp's CPU kernels: its CPU seconds are left out
 
 
@@ -160,6 +226,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--arch", type=int, default=90, help="warm: the CUDA arch to compile for (90: H100, H200)")
     ap.add_argument("--frames", type=int, default=3, help="warm: frames of each clip to drape")
     ap.add_argument("--clips", type=int, default=None, help="run: the first N packed clips only")
+    ap.add_argument("--precompile", action="store_true", help="run: compile every module in parallel first")
+    ap.add_argument("--workers", type=int, default=16, help="run --precompile: compiling threads")
+    ap.add_argument("--vertex-contact", action="store_true",
+                    help="run: the body's vertices only (full_contact off; its CUDA modules compile in seconds)")
+    ap.add_argument("--cache", default=None, help="run: Warp's kernel cache (default CACHE when it exists)")
     args = ap.parse_args(argv)
     out = {"pack": pack, "warm": warm, "run": run}[args.what](args)
     print(json.dumps(out, indent=1))
