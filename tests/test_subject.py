@@ -1189,6 +1189,59 @@ def test_a_top_over_a_skirt_is_tucked_at_the_waist(human):
     assert low[True] == pytest.approx(r.waist_y - TUCK, abs=0.012) and low[False] < r.waist_y - TUCK - 0.05
 
 
+def test_every_skirt_cut_has_its_folds_and_flare(human):
+    """Each cut's rest skirt ring by ring: round the hem, the radius's harmonic at the cut's
+    fold count has the amplitude its wave gives (a zigzag's first harmonic is 8/pi^2 of its
+    half depth, a sine's all of it) and stands over every other harmonic from the 5th to twice
+    the fold count; the stitched top ring has no folds; hems stand out in the order of the cuts'
+    flare; no cut is the first cut (a_line), which is what a garment without a cut gets."""
+    import dataclasses
+
+    from synmitsuba.body.garments import SKIRT_CUTS, GarmentParams, _flare
+    from synmitsuba.cloth.fabrics import FABRICS
+    assert all(c.fabric is None or c.fabric in FABRICS for c in SKIRT_CUTS.values())
+    r = human.regions
+    hem_radius = {}
+    for name, cut in SKIRT_CUTS.items():
+        g = GarmentParams(kind="skirt", ease=0.01, length=0.6, cut=name)
+        v, _, _ = _flare(human.body, r, g, 0.006, r.waist_y)
+        n = len(v) // 14
+        rings = v.reshape(14, n, 3)
+        assert np.allclose(rings[..., 1], rings[:, :1, 1])  # level rings
+        radius = [np.hypot(*(ring[:, [0, 2]] - ring[:, [0, 2]].mean(0)).T) for ring in rings]
+        hem_radius[name] = radius[-1].mean()
+        if not cut.folds:
+            continue
+        amp = np.abs(np.fft.rfft(radius[-1])) * 2 / n
+        expected = 0.5 * cut.depth * (8 / np.pi ** 2 if cut.sharp else 1.0)
+        assert amp[cut.folds] == pytest.approx(expected, rel=0.25), name
+        others = np.delete(amp[5:2 * cut.folds], cut.folds - 5)
+        assert others.max() < 0.35 * amp[cut.folds], name
+        assert np.abs(np.fft.rfft(radius[0]))[cut.folds] * 2 / n < 1e-3, name
+    assert hem_radius["straight"] < hem_radius["a_line"] < hem_radius["circle"]
+    plain = GarmentParams(kind="skirt", ease=0.01, length=0.6)
+    assert np.array_equal(_flare(human.body, r, plain, 0.006, r.waist_y)[0],
+                          _flare(human.body, r, dataclasses.replace(plain, cut="a_line"), 0.006, r.waist_y)[0])
+
+
+def test_skirts_and_dresses_are_drawn_cuts_and_nothing_else_is():
+    """300 sampled subjects: every skirt and dress has a cut, at least three cuts are drawn,
+    no other garment has one; the cut comes from the garment's own texture seed, so fixing the
+    outfit to a skirt draws the same person with or without cuts drawn; a cut that is no cut is
+    an error naming it."""
+    from synmitsuba.body.garments import GARMENTS, SKIRT_CUTS, GarmentParams, sample_skirt_cut
+    seen = set()
+    for i in range(300):
+        for g in sm.sample_subject(np.random.default_rng(i)).garments:
+            assert (g.cut in SKIRT_CUTS) if GARMENTS[g.kind].skirted else g.cut is None, (i, g.kind, g.cut)
+            seen.add(g.cut)
+    assert len(seen - {None}) >= 3
+    g = GarmentParams(kind="skirt")
+    assert sample_skirt_cut(g).cut == sample_skirt_cut(g).cut and sample_skirt_cut(g).texture == g.texture
+    with pytest.raises(ValueError, match=r"garments\[0\]\.cut.*'godet'"):
+        sm.SubjectRecipe.from_dict({"garments": [{"kind": "skirt", "cut": "godet"}]})
+
+
 def test_a_skirt_hangs_from_both_legs_through_a_stride():
     """Below the hips a skirt's weights mix the left and right legs' by side: the front and back
     centre follow both legs half and half, the sides one leg each (bones named .L and .R here).

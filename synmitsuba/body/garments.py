@@ -21,7 +21,7 @@ from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, foot_points, lace_mes
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
 from synmitsuba.geometry import face_normals, vertex_normals
-from synmitsuba.schema import Choice, Nested, Number, Params, spec
+from synmitsuba.schema import Choice, Nested, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
 
 CLEARANCE = 0.002
@@ -147,6 +147,39 @@ OUTFITS = (("tshirt", "trousers"), ("tshirt", "shorts"), ("longsleeve", "trouser
            ("longsleeve", "skirt"), ("dress",), ("longsleeve", "shorts"))
 
 
+@dataclass(frozen=True)
+class SkirtCut:
+    """How a skirt (or a dress's skirt) is cut. Its radius round the body's reach at each height
+    grows by ``flare + ease_flare * ease`` metres from the waist to the hem, as the height
+    share to the power ``curve``; on it, ``folds`` waves round the skirt (pleats or the godets
+    a full skirt falls into), ``depth`` metres from crest to trough, pressed flat for
+    ``stitched`` metres under the top and deepening over the next ``ramp`` (None: down to the
+    hem); ``sharp``: pleats (a zigzag) rather than soft waves. ``fabric``: what the cloth stage
+    simulates it as (a name in ``cloth.fabrics.FABRICS``; None: its garment kind's).
+    ``share``: how often a sampled skirt has this cut."""
+
+    flare: float
+    ease_flare: float = 0.4
+    curve: float = 1.3
+    folds: int = 0
+    depth: float = 0.0
+    stitched: float = 0.1
+    ramp: float | None = None
+    sharp: bool = False
+    fabric: str | None = None
+    share: float = 0.0
+
+
+# One entry per cut; a garment's ``cut`` names one (None: "a_line", as every skirt was cut first).
+SKIRT_CUTS: dict[str, SkirtCut] = {
+    "a_line": SkirtCut(0.06, share=0.4),
+    "pleated": SkirtCut(0.05, folds=12, depth=0.035, stitched=0.1, ramp=0.05, sharp=True,
+                        fabric="suiting", share=0.25),  # pressed: holds its creases
+    "circle": SkirtCut(0.1, 1.0, 1.0, folds=10, depth=0.1, stitched=0.04, share=0.2),
+    "straight": SkirtCut(0.02, 0.2, 2.0, share=0.15),
+}
+
+
 @dataclass
 class GarmentParams(Params):
     kind: str = spec("tshirt", Choice(GARMENTS))
@@ -155,6 +188,7 @@ class GarmentParams(Params):
     length: float = spec(0.5, Number(0, 1), doc="along the kind's range")
     thickness: float = spec(0.003, Number(0.0005, 0.04), doc="metres (footwear: the sole)")
     texture: GarmentTextureParams = spec(factory=GarmentTextureParams, check=Nested(GarmentTextureParams))
+    cut: str | None = spec(None, optional(Choice(SKIRT_CUTS)), doc="skirts and dresses: a SKIRT_CUTS name; None: a_line")
 
 
 # footwear drawn with an outfit: no boots under long trousers (their shaft would cut through the legs)
@@ -228,8 +262,32 @@ def body_regions(body) -> BodyRegions:
                        neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)))
 
 
-def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, n_seg: int = 48):
-    """A skirt surface from top_y down, flaring outwards, outside every body vertex it passes."""
+def sample_skirt_cut(g: GarmentParams) -> GarmentParams:
+    """``g`` with a cut from ``SKIRT_CUTS`` (by share) when it is a skirt or a dress, drawn from
+    its texture seed (so the subject's other draws are the ones they were before skirts had cuts)."""
+    if not GARMENTS[g.kind].skirted:
+        return g
+    rng = np.random.default_rng([g.texture.seed, 11])
+    names = [k for k, c in SKIRT_CUTS.items() if c.share > 0]
+    share = np.array([SKIRT_CUTS[k].share for k in names])
+    return dataclasses.replace(g, cut=names[int(rng.choice(len(names), p=share / share.sum()))])
+
+
+def _folds(cut: SkirtCut, ang: np.ndarray, t: float) -> np.ndarray:
+    """Radial offset round a ring where the folds stand out: a zigzag for pleats, a sine for a
+    full skirt's waves, ``t`` (0..1) of their full depth."""
+    if not cut.folds:
+        return np.zeros_like(ang)
+    phase = ang * cut.folds / (2 * np.pi) % 1.0
+    wave = 1 - 4 * np.abs(phase - 0.5) if cut.sharp else np.cos(2 * np.pi * phase)
+    return 0.5 * cut.depth * t * wave
+
+
+def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float):
+    """A skirt surface from top_y down, widening outwards by its cut (``SKIRT_CUTS``), outside
+    every body vertex it passes."""
+    cut = SKIRT_CUTS[g.cut or "a_line"]
+    n_seg = 48 if not cut.folds else 6 * cut.folds  # six points a fold
     v = body.vertices[np.isin(r.group, ["torso", "upperleg", "lowerleg"])]  # not the hanging arms
     bottom = r.hip_y - 0.1 - (r.hip_y - 0.1 - 0.15) * g.length
     heights = np.linspace(top_y, bottom, 14)
@@ -243,11 +301,15 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, 
         reach = np.array([(band @ di).max() if len(band) else 0.05 for di in d])
         # the support of the body in each direction; smooth it around the ring
         reach = np.maximum(reach, np.convolve(np.pad(reach, 3, mode="wrap"), np.ones(7) / 7, "valid"))
-        radius = reach + offset + (0.06 + 0.4 * g.ease) * (k / (len(heights) - 1)) ** 1.3
+        radius = reach + offset + (cut.flare + cut.ease_flare * g.ease) * (k / (len(heights) - 1)) ** cut.curve
         if prev is not None:
             radius = np.maximum(radius, prev)  # never narrows downwards
         prev = radius
-        rings.append(np.column_stack([centre[0] + radius * d[:, 0], np.full(n_seg, h), centre[1] + radius * d[:, 1]]))
+        drop = h - top_y  # <= 0
+        ramp = cut.ramp or max(top_y - bottom - cut.stitched, 1e-6)
+        t = float(np.clip((-drop - cut.stitched) / ramp, 0, 1))
+        out = radius + _folds(cut, ang, t)
+        rings.append(np.column_stack([centre[0] + out * d[:, 0], np.full(n_seg, h), centre[1] + out * d[:, 1]]))
     verts = np.concatenate(rings)
     faces = []
     for k in range(len(heights) - 1):
@@ -418,7 +480,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     v, f, uv = GARMENT_SHAPES[kind.shape].build(body, r, split, g, shape, offset)
     n_faces, n_vertices = len(f), len(v)
     if GARMENT_SHAPES[kind.shape].hemmed:
-        v, f, uv = hem(body, v, f, uv, g.thickness)
+        v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds))
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
 
@@ -525,9 +587,25 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
     return (p + out[:, None] * n)[rep]
 
 
-def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
+def hem_sources(m: GarmentMesh) -> np.ndarray:
+    """The edge vertex each vertex of ``m``'s hem band was turned in from (``hem`` appends the
+    band last, its faces as ``[b, a, inner(a)]`` for every open edge (a, b), then the other
+    half of each quad), in band order; empty for a garment without a hem."""
+    n_faces, n_vertices = m.hem
+    if not n_vertices:
+        return np.zeros(0, np.int64)
+    first = m.faces[len(m.faces) - n_faces:][:n_faces // 2]
+    source = np.full(n_vertices, -1, np.int64)
+    source[first[:, 2] - (len(m.vertices) - n_vertices)] = first[:, 1]
+    assert (source >= 0).all()  # every band vertex is some open edge's inner(a)
+    return source
+
+
+def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_normal: bool = False):
     """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
-    thickness) deep towards the closest body point, so an edge seen in a close-up has thickness.
+    thickness) deep towards the closest body point (``along_normal``: along the cloth's own
+    normal, turned to the body, so a pleated or waved hem's band follows its folds instead of
+    crossing itself), so an edge seen in a close-up has thickness.
     Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
     the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
     edge = open_edges(f, weld(v))
@@ -538,6 +616,9 @@ def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float):
     gap = np.linalg.norm(v[ends] - closest, axis=1, keepdims=True)
     towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9),  # on the body: the cloth's normal
                        vertex_normals(v, f)[ends])
+    if along_normal:
+        n = vertex_normals(v, f)[ends]
+        towards = n * np.where(np.einsum("ij,ij->i", n, towards) < 0, -1.0, 1.0)[:, None]
     inner = -np.ones(len(v), np.int64)
     inner[ends] = len(v) + np.arange(len(ends))
     a, b = edge.T

@@ -25,6 +25,7 @@ FABRICS: dict[str, Fabric] = {
     "jersey": Fabric(0.16, 6.0e3, 6.0e3, 1.0e-2, 5.0e-2, 1.0e-3, 0.5),   # knit t-shirt cotton: soft, clingy
     "woven": Fabric(0.12, 1.0e4, 1.0e4, 1.0e-2, 1.0e-1, 1.0e-3, 0.4),    # shirting, light skirts: crisp, light
     "knit": Fabric(0.30, 5.0e3, 5.0e3, 1.5e-2, 8.0e-2, 2.0e-3, 0.6),     # sweaters: heavy and stretchy
+    "suiting": Fabric(0.30, 1.5e4, 1.5e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.45),  # pressed wool, pleats: keeps a crease
     "denim": Fabric(0.40, 2.0e4, 2.0e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.5),    # twill, chinos: stiff, heavy
     "leather": Fabric(0.60, 3.0e4, 3.0e4, 2.0e-2, 6.0e-1, 1.0e-2, 0.6),  # holds its shape
 }

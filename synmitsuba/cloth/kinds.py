@@ -9,7 +9,7 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.garments import BodyRegions
+from synmitsuba.body.garments import SKIRT_CUTS, BodyRegions, GarmentParams
 
 
 @dataclass(frozen=True)
@@ -38,3 +38,10 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     "skirt": ClothKind("woven", top(0.02)),  # hangs from its waistband
     "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
 }
+
+
+def fabric_of(kind: ClothKind, garment: GarmentParams | None) -> str:
+    """The fabric a garment is simulated as: its skirt cut's when the cut names one (pressed
+    pleats), else its kind's."""
+    cut = SKIRT_CUTS.get(garment.cut) if garment is not None and garment.cut else None
+    return (cut.fabric if cut is not None else None) or kind.fabric
