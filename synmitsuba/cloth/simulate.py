@@ -16,10 +16,12 @@ from typing import Callable
 
 import numpy as np
 
+from synmitsuba.body.garments import hem_sources
 from synmitsuba.body.topology import weld
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
-from synmitsuba.cloth.kinds import CLOTH_KINDS
+from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
 from synmitsuba.errors import SynMitsubaError
+from synmitsuba.geometry import vertex_normals
 
 
 class ClothError(SynMitsubaError, RuntimeError):
@@ -100,13 +102,19 @@ class Collider:
 @dataclass
 class _Garment:
     """A subject's simulated garment: ``rows`` the layer vertex each particle is (the first of
-    its weld group), ``index`` the particle of each layer vertex."""
+    its weld group), ``index`` the particle of each layer vertex but the hem band's; the band
+    (``band``: its vertices' edge vertices, ``depth``: how far in along the cloth's normal) is
+    not simulated: its few-millimetre triangles are where VBD went unstable (pleated skirts),
+    so it follows its edge."""
 
     name: str
     part: int
     rows: np.ndarray
     index: np.ndarray
     piece: ClothPiece
+    faces: np.ndarray  # the layer's faces but the band's
+    band: np.ndarray
+    depth: np.ndarray
 
 
 def simulated_garments(human) -> list[_Garment]:
@@ -116,12 +124,28 @@ def simulated_garments(human) -> list[_Garment]:
         kind = CLOTH_KINDS.get(part.name)
         if kind is None:
             continue
-        rep = weld(part.rest)
-        rows, index = np.unique(rep, return_inverse=True)
+        mesh = next(m for m in human.garments if m.params.kind == part.name)
+        band = hem_sources(mesh)
+        main = len(part.rest) - len(band)
+        faces = part.faces[:len(part.faces) - mesh.hem[0]]
+        rows, index = np.unique(weld(part.rest[:main]), return_inverse=True)
         index = index.reshape(-1)
         held = kind.held(part.rest[rows], human.regions)
-        out.append(_Garment(part.name, k, rows, index, ClothPiece(index[part.faces], held, FABRICS[kind.fabric])))
+        fabric = FABRICS[fabric_of(kind, mesh.params)]
+        normals = vertex_normals(part.rest[:main], faces)[band]
+        depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
+        out.append(_Garment(part.name, k, rows, index, ClothPiece(index[faces], held, fabric), faces,
+                            band, depth))
     return out
+
+
+def _with_band(g: _Garment, q: np.ndarray) -> np.ndarray:
+    """(F, V, 3) layer vertices from the simulated ones (F, main, 3): the hem band ``depth``
+    in from its edge along the simulated cloth's normal there."""
+    if not len(g.band):
+        return q
+    n = np.stack([vertex_normals(f, g.faces)[g.band] for f in q])
+    return np.concatenate([q, q[:, g.band] - n * g.depth[None, :, None]], axis=1)
 
 
 def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> ClothTrack | None:
@@ -136,7 +160,7 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
     q = drape([g.piece for g in garments], collider, s, names=[g.name for g in garments])
     frames, start = {}, 0
     for g in garments:
-        frames[g.name] = q[:, start:start + len(g.rows)][:, g.index]
+        frames[g.name] = _with_band(g, q[:, start:start + len(g.rows)][:, g.index])
         start += len(g.rows)
     return ClothTrack(frames)
 
