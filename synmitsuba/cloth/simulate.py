@@ -4,11 +4,13 @@ kernels run in order), against the posed body as a moving mesh collider and the 
 
 Each garment's uv seams are welded (else its panels fall apart); its held vertices (a
 waistband, a bodice) are not simulated but moved to the skinned garment's place at every
-substep, and the rest hangs from them. The cloth first hangs at the clip's first pose for
-``settle_s`` (from the skinned garment: gravity takes out its shell's stiffness), then follows
-the clip frame by frame, the body and the held vertices moved linearly between frames over
-the substeps. Newton's full-surface contacts (the body's edges and faces against the cloth's,
-not only its vertices) keep a leg from passing between the cloth's vertices."""
+substep, and the rest hangs from them; its hem band (the turned-in edge) is not simulated
+either but set, each frame, its depth in from its edge along the cloth's normal. The cloth
+first hangs at the clip's first pose for ``settle_s`` (from the skinned garment: gravity takes
+out its shell's stiffness), then follows the clip frame by frame, the body and the held
+vertices moved linearly between frames over the substeps. Newton's full-surface contacts (the
+body's edges and faces against the cloth's, not only its vertices) keep a leg from passing
+between the cloth's vertices."""
 from __future__ import annotations
 
 from dataclasses import dataclass
