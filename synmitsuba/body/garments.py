@@ -296,6 +296,7 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float):
     d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
     rings = []
     prev = None
+    ramp = cut.ramp or max(top_y - bottom - cut.stitched, 1e-6)  # metres over which the folds deepen
     for k, h in enumerate(heights):
         band = v[np.abs(v[:, 1] - h) < 0.03][:, [0, 2]] - centre
         reach = np.array([(band @ di).max() if len(band) else 0.05 for di in d])
@@ -305,10 +306,7 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float):
         if prev is not None:
             radius = np.maximum(radius, prev)  # never narrows downwards
         prev = radius
-        drop = h - top_y  # <= 0
-        ramp = cut.ramp or max(top_y - bottom - cut.stitched, 1e-6)
-        t = float(np.clip((-drop - cut.stitched) / ramp, 0, 1))
-        out = radius + _folds(cut, ang, t)
+        out = radius + _folds(cut, ang, float(np.clip((top_y - h - cut.stitched) / ramp, 0, 1)))
         rings.append(np.column_stack([centre[0] + out * d[:, 0], np.full(n_seg, h), centre[1] + out * d[:, 1]]))
     verts = np.concatenate(rings)
     faces = []
@@ -614,10 +612,9 @@ def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_
     ends = np.unique(edge)
     closest = body.surface().closest(v[ends])[0]
     gap = np.linalg.norm(v[ends] - closest, axis=1, keepdims=True)
-    towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9),  # on the body: the cloth's normal
-                       vertex_normals(v, f)[ends])
+    n = vertex_normals(v, f)[ends]
+    towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9), n)  # on the body: the cloth's normal
     if along_normal:
-        n = vertex_normals(v, f)[ends]
         towards = n * np.where(np.einsum("ij,ij->i", n, towards) < 0, -1.0, 1.0)[:, None]
     inner = -np.ones(len(v), np.int64)
     inner[ends] = len(v) + np.arange(len(ends))

@@ -40,8 +40,7 @@ CLOTH_KINDS: dict[str, ClothKind] = {
 }
 
 
-def fabric_of(kind: ClothKind, garment: GarmentParams | None) -> str:
+def fabric_of(kind: ClothKind, garment: GarmentParams) -> str:
     """The fabric a garment is simulated as: its skirt cut's when the cut names one (pressed
     pleats), else its kind's."""
-    cut = SKIRT_CUTS.get(garment.cut) if garment is not None and garment.cut else None
-    return (cut.fabric if cut is not None else None) or kind.fabric
+    return (SKIRT_CUTS[garment.cut].fabric if garment.cut else None) or kind.fabric
