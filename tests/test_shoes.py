@@ -37,14 +37,23 @@ def _foot(human, side: float):
     return np.flatnonzero(mask)
 
 
+def _covered(foot: np.ndarray, kind: str) -> np.ndarray:
+    """Which of a foot's vertices (rest) the closed vamp covers: the front 40 %, or a pump's
+    toes (its opening reaches ``vamp`` further over the instep)."""
+    style = SHOE_STYLES[kind]
+    start = max(0.6, style.throat + style.vamp / np.ptp(foot[:, 2]) + 0.05)
+    return foot[:, 2] > foot[:, 2].min() + start * np.ptp(foot[:, 2])
+
+
 def test_the_body_stands_on_the_sole_and_the_sole_on_the_ground(shod):
     kind, h = shod
     g = next(m for m in h.garments if m.params.kind == kind)
     shoe = _shoe(h)
-    assert shoe.rest[:, 1].min() == pytest.approx(0.0, abs=1e-9)
+    standing = {lay.name: lay for lay in h.pose(*h.standing(), resolve=False)}  # at rest, but on heels if any
+    assert standing[kind].vertices[:, 1].min() == pytest.approx(0.0, abs=1e-5)
     assert h.body.vertices[:, 1].min() == pytest.approx(g.params.thickness, abs=2e-3)
     sole = shoe.uv[:, 1] < (SOLE_V + UPPER_V) / 2
-    flat = shoe.rest[sole & (shoe.rest[:, 1] < 1e-9)]
+    flat = shoe.rest[sole & (np.abs(shoe.rest[:, 1]) < 1e-9)]  # the sole's bottom (a heel reaches below it)
     for side in (1.0, -1.0):  # the footprint spans the foot, from behind the heel to past the toes
         foot = h.body.vertices[_foot(h, side)]
         print_ = flat[np.sign(flat[:, 0]) == side]
@@ -66,24 +75,25 @@ def test_at_rest_every_shoe_vertex_is_outside_the_foot_and_the_forefoot_inside_t
         if SHOE_STYLES[kind].straps:
             continue  # a sandal leaves the foot out between its straps
         foot = body.vertices[ids]
-        front = foot[foot[:, 2] > foot[:, 2].min() + 0.6 * np.ptp(foot[:, 2])]
+        front = foot[_covered(foot, kind)]
         assert winding_numbers(shoe.rest, shoe.faces, front).min() > 0.5
 
 
 @pytest.mark.parametrize("motion", ["walk", "run"])
-def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion):
+def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, kind="sneakers"):
     """Placed as composition places a clip (its lowest point over the clip on the ground), the
     lowest sole point is never under the ground; in a walk (one foot always planted) it is on
     it (under 3 mm) in most frames and within 1.5 cm in all (the walk plants the lowest joint,
     and a rigid sole rocks on its heel or toe as the foot rolls); the forefoot never leaves
     its shoe."""
     from synmitsuba.compose.subjects import clip_bounds
-    h = _subject("sneakers")
-    clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h.skeleton)
+    from synmitsuba.compose.subjects import with_heels
+    h = _subject(kind)
+    clip = with_heels(sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h.skeleton),
+                      h.heels)
     _, _, lift = clip_bounds(h, clip)
     shoe = _shoe(h)
-    front = [ids[h.body.vertices[ids, 2] > h.body.vertices[ids, 2].min() + 0.6 * np.ptp(h.body.vertices[ids, 2])]
-             for ids in (_foot(h, 1.0), _foot(h, -1.0))]
+    front = [ids[_covered(h.body.vertices[ids], kind)] for ids in (_foot(h, 1.0), _foot(h, -1.0))]
     rows = np.isin(h.split.source, np.concatenate(front))  # the body layer is the seam-split render mesh
     lowest = []
     for f in range(clip.n_frames):
@@ -98,20 +108,22 @@ def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion):
         assert np.median(lowest) < 0.003 and lowest.max() < 0.015, lowest
 
 
-def test_styles_are_drawn_with_the_outfit_and_boots_never_under_trousers():
+def test_styles_are_drawn_with_the_outfit_boots_never_under_trousers_heels_under_skirts():
     counts = dict.fromkeys(STYLES, 0)
     for seed in range(300):
         r = sm.sample_subject(np.random.default_rng(seed))
         kinds = [g.kind for g in r.garments]
         shoes = [k for k in kinds if k in GARMENTS and GARMENTS[k].footwear]
         assert len(shoes) <= 1 and not ("boots" in kinds and "trousers" in kinds)
+        assert "heels" not in kinds or any(GARMENTS[k].skirted for k in kinds)  # heels with skirts and dresses
         for k in shoes:
             counts[k] += 1
         assert sm.SubjectRecipe.from_json(r.to_json()).to_json() == r.to_json()
     total = sum(counts.values())
     assert 0.75 * 300 < total < 0.95 * 300  # 85 % shod
+    skirted = 0.35  # about this share of outfits have a skirt or a dress, the only ones heels are drawn with
     for k, share in FOOTWEAR.items():
-        assert counts[k] > 0.3 * share * total, counts
+        assert counts[k] > 0.3 * share * total * (skirted if k == "heels" else 1.0), counts
 
 
 def test_a_recipe_with_the_old_shoes_kind_still_builds_its_hull_shoes():
@@ -185,3 +197,29 @@ def test_laces_are_cords_over_the_throat_in_the_laces_colour(shod):
     assert np.allclose(texels, lace, atol=1e-6)
     shoe = _shoe(h)
     assert (np.isin(shoe.uv[:, 0], np.unique(cuv[:, 0])) & (shoe.uv[:, 1] == cuv[0, 1])).sum() == 2 * len(cv)
+
+
+def test_heels_pitch_the_foot_with_the_heel_tip_and_the_level_forefoot_on_the_ground():
+    """Standing in heels: the heel's tip and the forefoot's sole are on the ground (the forefoot
+    level, under 1 mm across), the body's heel is up by the style's heel height over its ball
+    (measured on the posed body's own underside), and the forefoot stays in its shoe."""
+    h = _subject("heels")
+    g = next(m for m in h.garments if m.params.kind == "heels").params
+    shoe = _shoe(h)
+    layers = {lay.name: lay for lay in h.pose(*h.standing(), resolve=False)}
+    v, body = layers["heels"].vertices, layers["body"].vertices
+    heel_block = shoe.rest[:, 1] < -1e-6  # at rest only the heel reaches under the sole
+    bottom = np.abs(shoe.rest[:, 1]) < 1e-9
+    for side, pitch in zip((1.0, -1.0), h.heels):
+        mine = np.sign(shoe.rest[:, 0]) == side
+        assert v[heel_block & mine, 1].min() == pytest.approx(0.0, abs=1e-5)
+        fore = bottom & mine & (pitch.ahead(shoe.rest) > 0.03)
+        assert v[fore, 1].min() == pytest.approx(0.0, abs=1e-5) and np.ptp(v[fore, 1]) < 1e-3
+        rows = np.isin(h.split.source, _foot(h, side))  # the body layer is the seam-split render mesh
+        rest, posed = h.body.vertices[h.split.source[rows]], body[rows]
+        back = rest[:, 2] < rest[:, 2].min() + 0.02  # the heel's back, its underside the lowest of it
+        ball = rest[:, 2] > rest[:, 2].min() + 0.6 * np.ptp(rest[:, 2])
+        rise = posed[back, 1].min() - posed[ball, 1].min()
+        assert rise == pytest.approx(pitch.height, abs=0.012), (rise, pitch.height)
+    assert h.heels[0].height == pytest.approx(0.05 + 0.04 * g.length)
+    test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe("walk", kind="heels")

@@ -16,8 +16,8 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.collide import neighbour_mean
-from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, foot_points, lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material,
-                                   shoe_mesh)
+from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_points, heel_height, heel_mesh, heel_pitch,
+                                   lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
 from synmitsuba.geometry import face_normals, vertex_normals
@@ -136,10 +136,11 @@ GARMENTS: dict[str, GarmentKind] = {
                          (0.005, 0.03), skirted=True, takes_jacket=False),
     "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none", footwear=True),
     # built round the foot (body/shoes.py); thickness is the sole's height, length the collar's (and shaft's)
-    **{name: GarmentKind(Layer.SHOES, ALLOWANCE, 0, "shoe", None, (0.0, 1.0), (0.0, 0.004), sole, fabric="none",
-                         footwear=True, material=lambda g, size: shoe_material(SHOE_STYLES[g.kind], g.texture, size))
+    **{name: GarmentKind(Layer.SHOES, ALLOWANCE, 0, "heeled" if SHOE_STYLES[name].heel[1] else "shoe", None,
+                         (0.0, 1.0), (0.0, 0.004), sole, fabric="none", footwear=True,
+                         material=lambda g, size: shoe_material(SHOE_STYLES[g.kind], g.texture, size))
        for name, sole in (("sneakers", (0.02, 0.032)), ("boots", (0.02, 0.032)), ("dress_shoes", (0.012, 0.018)),
-                          ("sandals", (0.01, 0.022)))},
+                          ("sandals", (0.01, 0.022)), ("heels", (0.006, 0.01)))},
 }
 KINDS = tuple(GARMENTS)
 # outfits sample_subject draws from (a jacket and shoes are added by chance)
@@ -191,15 +192,18 @@ class GarmentParams(Params):
     cut: str | None = spec(None, optional(Choice(SKIRT_CUTS)), doc="skirts and dresses: a SKIRT_CUTS name; None: a_line")
 
 
-# footwear drawn with an outfit: no boots under long trousers (their shaft would cut through the legs)
-FOOTWEAR = {"sneakers": 0.5, "dress_shoes": 0.2, "boots": 0.15, "sandals": 0.15}
+# footwear drawn with an outfit: no boots under long trousers (their shaft would cut through the legs),
+# heels with skirts and dresses only (last: an outfit without a skirt draws as it did before heels)
+FOOTWEAR = {"sneakers": 0.5, "dress_shoes": 0.2, "boots": 0.15, "sandals": 0.15, "heels": 0.3}
 
 
 def sample_footwear(shoes: GarmentParams, outfit) -> GarmentParams:
     """A styled pair in place of a sampled ``shoes`` entry, drawn from its texture seed (so the
     subject's other draws are the ones they were before shoes had styles)."""
     rng = np.random.default_rng([shoes.texture.seed, 7])
-    weights = {k: 0.0 if k == "boots" and "trousers" in outfit else w for k, w in FOOTWEAR.items()}
+    skirted = any(GARMENTS[k].skirted for k in outfit)
+    weights = {k: 0.0 if (k == "boots" and "trousers" in outfit) or (k == "heels" and not skirted) else w
+               for k, w in FOOTWEAR.items()}
     p = np.array(list(weights.values()))
     kind = list(weights)[int(rng.choice(len(p), p=p / p.sum()))]
     return sample_garment(kind, rng)
@@ -424,6 +428,8 @@ def _shoe_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParam
         if style.shaft[1]:
             top = g.thickness + style.shaft[0] + (style.shaft[1] - style.shaft[0]) * g.length
             parts.append(shaft_mesh(foot, g.thickness, top, offset))
+        if style.heel[1]:
+            parts.append(heel_mesh(foot, heel_pitch(body.skeleton, foot, side, heel_height(style, g.length)), style))
     n = np.cumsum([0] + [len(p[0]) for p in parts])
     v, f, uv = (np.concatenate(x) for x in ([p[0] for p in parts], [p[1] + k for p, k in zip(parts, n)],
                                              [p[2] for p in parts]))
@@ -439,6 +445,29 @@ def _rigid_feet(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.
     foot[np.arange(len(v)), np.where(v[:, 0] > 0, sk.index("foot.L"), sk.index("foot.R"))] = 1.0
     t = np.clip((v[:, 1] - sk.rest_positions[sk.index("foot.L"), 1]) / 0.06, 0.0, 1.0)[:, None]
     return ((1 - t) * foot + t * weights).astype(weights.dtype)
+
+
+def _heeled_feet(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Heels: rigid on the feet, but in front of the ball a shoe follows the toes (which the
+    heel's pitch turns back flat on the insole), blended over 3 cm across the ball line."""
+    out = _rigid_feet(body, r, v, weights)
+    for side in (1.0, -1.0):
+        pitch = heel_pitch(body.skeleton, foot_points(body, r, side), side, 0.05)  # only its ball line
+        t = np.clip((pitch.ahead(v) + 0.015) / 0.03, 0.0, 1.0)
+        t = t * t * (3 - 2 * t) * (np.sign(v[:, 0]) == side)
+        moved = t * out[:, pitch.foot]
+        out[:, pitch.toes[2]] += moved
+        out[:, pitch.foot] -= moved
+    return out
+
+
+def heel_pitches(body, r: BodyRegions, g: GarmentParams) -> tuple[HeelPitch, ...]:
+    """How a pair of heels holds the feet (left, right); nothing for flat shoes."""
+    style = SHOE_STYLES.get(g.kind)
+    if style is None or not style.heel[1]:
+        return ()
+    return tuple(heel_pitch(body.skeleton, foot_points(body, r, side), side, heel_height(style, g.length))
+                 for side in (1.0, -1.0))
 
 
 @dataclass(frozen=True)
@@ -462,6 +491,7 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
     "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_rigid_feet, sole=True),
+    "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_heeled_feet, sole=True),  # the toes bend at the ball
 }
 
 

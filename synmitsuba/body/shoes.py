@@ -46,6 +46,9 @@ class ShoeStyle:
     uppers: tuple = ()              # LAB colours the upper takes
     soles: tuple = ()               # and the sole
     roughness: tuple[float, float] = (0.6, 0.45)  # upper, sole
+    vamp: float = 0.0               # metres the throat's edge dips towards the toes over the instep (a pump's U)
+    heel: tuple[float, float] = (0.0, 0.0)  # heels: the heel's height over the ball's, metres (by ``length``)
+    tip: tuple[float, float] = (0.0, 0.0)   # and the half-width and half-length of its tip on the ground
 
 
 BLACK, WHITE, GREY, NAVY = [12, 0, 0], [93, 0, 2], [55, 0, 0], [22, 5, -25]
@@ -63,6 +66,9 @@ SHOE_STYLES: dict[str, ShoeStyle] = {
     "sandals": ShoeStyle((0.012, 0.02), 0.35, 0.008, 2.0, straps=(0.6, 0.8),
                          uppers=(BROWN, TAN, BLACK, [70, 8, 25]), soles=(TAN, BROWN, BLACK, [80, 4, 14]),
                          roughness=(0.6, 0.8)),
+    "heels": ShoeStyle((0.03, 0.045), 0.6, 0.035, 1.3, vamp=0.04, heel=(0.05, 0.09), tip=(0.006, 0.007),
+                       uppers=(BLACK, BLACK, [45, 55, 30], [68, 12, 20], NAVY, WHITE, OXBLOOD),
+                       soles=(BLACK, [20, 3, 6]), roughness=(0.28, 0.4)),
 }
 
 
@@ -184,8 +190,11 @@ def _opening(v: np.ndarray, uv: np.ndarray, style: ShoeStyle, sole: float, colla
         keep = np.maximum(straps, rim)
     else:
         dip = collar - 0.012 * np.clip(along / style.throat, 0, 1)  # the top line falls a little to the throat
-        keep = np.maximum(dip - y, (along - style.throat) * (toes - heel))
-    return np.where(uv[:, 1] < UPPER_V, 1.0, keep)
+        over = np.clip((y - dip) / 0.025, 0.0, 1.0)  # how far up the instep, from the collar's height
+        keep = np.maximum(dip - y, (along - style.throat) * (toes - heel) - style.vamp * over)
+    # the sole is kept whole; an end cap's centre (the sole's v, but up in the ring) is cut like
+    # the upper round it (kept, it drew a sliver up to the ring's top over a low collar)
+    return np.where((uv[:, 1] < UPPER_V) & (y <= sole + 1e-9), 1.0, keep)
 
 
 def surface_at(v: np.ndarray, f: np.ndarray, uv: np.ndarray, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -316,3 +325,113 @@ def shoe_material(style: ShoeStyle, p: GarmentTextureParams, size: int = 256):
     from synmitsuba.scene.materials import Material
     albedo, rough = shoe_texture(style, p, size)
     return Material(texture=albedo, kind="principled", roughness_map=rough, specular=0.4)
+
+
+# -- heels: the foot pitched up on a heel --------------------------------------------------------
+# A heeled shoe is built round the rest (flat) foot like any other; the pose holds the foot turned
+# about the ankle so the heel rises over the ball (``HeelPitch``) and the toes turned back so they
+# stay flat, and the heel is a block under the heel cup reaching the ground in that pose.
+@dataclass(frozen=True)
+class HeelPitch:
+    """How a heeled shoe holds one foot: bone ``foot``'s local rotation is followed by
+    ``rotation`` (rest axes, about the ankle: the heel rises ``height`` metres over the ball) and
+    the ``toes``' first bones are turned back by its inverse first; the ball line (through the
+    first and fifth toes' joints, ``ball``) drops about ``drop`` metres (the middle toe's joint
+    exactly: the shoe's front follows it)."""
+
+    foot: int
+    toes: tuple[int, ...]
+    rotation: np.ndarray
+    pivot: np.ndarray
+    ball: np.ndarray     # (2, 3) rest points on the ball line
+    height: float
+    drop: float
+
+    def pitched(self, points: np.ndarray) -> np.ndarray:
+        """Rest points turned as the foot turns them."""
+        return (points - self.pivot) @ self.rotation.T + self.pivot
+
+    def unpitched(self, points: np.ndarray) -> np.ndarray:
+        return (points - self.pivot) @ self.rotation + self.pivot
+
+    def ahead(self, points: np.ndarray) -> np.ndarray:
+        """Metres each rest point lies in front of the ball line (along the ground)."""
+        along = self.ball[1] - self.ball[0]
+        n = np.array([-along[2], 0.0, along[0]])
+        n *= np.sign(n[2]) / np.linalg.norm(n)  # forward: +z
+        return (points - self.ball[0]) @ n
+
+
+def pitch_feet(rotations: np.ndarray, heels) -> np.ndarray:
+    """Local rotations (..., J, 3, 3) with each foot of ``heels`` (``HeelPitch`` records) pitched on
+    its heel and its toes turned back flat (a copy; the same for none)."""
+    rot = np.array(rotations, dtype=np.float64)
+    for h in heels:
+        rot[..., h.foot, :, :] = rot[..., h.foot, :, :] @ h.rotation
+        for toe in h.toes:
+            rot[..., toe, :, :] = h.rotation.T @ rot[..., toe, :, :]
+    return rot
+
+
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    k = axis / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def heel_pitch(skeleton, points: np.ndarray, side: float, height: float) -> HeelPitch:
+    """The pitch that raises the back of the heel of ``points`` (``foot_points``, one side:
+    +1 left) ``height`` metres over the ball line, turning about an axis along that line (so
+    every toe's joint drops alike and the forefoot stays level) through the ankle."""
+    s = "L" if side > 0 else "R"
+    toes = tuple(skeleton.index(f"toe{k}-1.{s}") for k in range(1, 6))
+    ball = skeleton.rest_positions[[toes[0], toes[-1]]]
+    pivot = skeleton.rest_positions[skeleton.index(f"foot.{s}")]
+    axis = np.array([ball[1, 0] - ball[0, 0], 0.0, ball[1, 2] - ball[0, 2]])
+    under = points[points[:, 1] < pivot[1]]  # the foot under the ankle (the calf reaches further back)
+    back = under[np.argmin(under[:, 2])]
+    flat = HeelPitch(skeleton.index(f"foot.{s}"), toes, np.eye(3), pivot, ball, 0.0, 0.0)
+    reach = -float(flat.ahead(back[None])[0])  # metres from the heel's back to the ball line
+    angle = float(np.arcsin(min(height / reach, 0.6)))
+    rot = _axis_rotation(axis, angle)
+    if ((back - pivot) @ rot.T)[1] < (back - pivot)[1]:  # the heel must go up
+        rot = rot.T
+    mid = skeleton.rest_positions[toes[2]]  # the toe a shoe's front follows (``garments._heeled_feet``)
+    drop = float(mid[1] - ((mid - pivot) @ rot.T + pivot)[1])
+    return HeelPitch(flat.foot, toes, rot, pivot, ball, height, drop)
+
+
+HEEL_RINGS, HEEL_SIDES = 10, 20
+
+
+def heel_height(style: ShoeStyle, length: float) -> float:
+    """A heeled style's heel height for a pair's ``length`` (0..1)."""
+    return style.heel[0] + (style.heel[1] - style.heel[0]) * length
+
+
+def heel_mesh(points: np.ndarray, pitch: HeelPitch, style: ShoeStyle, embed: float = 0.003):
+    """The heel under one shoe (its foot ``points``), in rest coordinates: from an oval under the
+    heel cup (sunk ``embed`` into the sole) down to ``style.tip`` on the ground the pitched
+    forefoot stands on, straight down in that pose, narrowing fast under the cup (a slim heel).
+    (vertices, faces, uv), uv in the sole's colour."""
+    under = points[points[:, 1] < pitch.pivot[1]]  # the foot under the ankle (the calf reaches further back)
+    heel = under[:, 2].min()
+    cup = under[under[:, 2] < heel + 0.05]
+    half = (cup[:, 0].max() - cup[:, 0].min()) / 2
+    cx, az = (cup[:, 0].max() + cup[:, 0].min()) / 2, 0.032
+    cz = heel - BACK + az + 0.002
+    ang = np.linspace(0, 2 * np.pi, HEEL_SIDES, endpoint=False)
+    top = np.column_stack([cx + 0.6 * half * np.cos(ang), np.full(HEEL_SIDES, embed), cz + az * np.sin(ang)])
+    top_p = pitch.pitched(top)
+    ground = -pitch.drop  # the forefoot's sole, rest y = 0, drops with the ball
+    centre = top_p.mean(0)
+    centre[2] -= 0.3 * az  # the tip sits under the back half of the cup
+    bottom = np.column_stack([centre[0] + style.tip[0] * np.cos(ang), np.full(HEEL_SIDES, ground),
+                              centre[2] + style.tip[1] * np.sin(ang)])
+    t = np.linspace(0, 1, HEEL_RINGS)[:, None, None]
+    w = 1 - (1 - t) ** 3  # the outline narrows fast under the cup
+    rings = top_p + (bottom - top_p) * w
+    rings[..., 1] = (top_p[..., 1] + (bottom[..., 1] - top_p[..., 1]) * t[..., 0])
+    v, f = closed_tube(pitch.unpitched(rings.reshape(-1, 3)).reshape(rings.shape))
+    uv = np.column_stack([np.full(len(v), 0.03), np.linspace(0.02, SOLE_V * 0.8, len(v))])
+    return v, f, uv

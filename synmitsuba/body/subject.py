@@ -17,7 +17,8 @@ from synmitsuba.body.expressions import face_units
 from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment,
-                                      footwear_lift, metres_per_uv)
+                                      footwear_lift, heel_pitches, metres_per_uv)
+from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
@@ -140,6 +141,8 @@ class LayeredHuman:
         clothes = [not GARMENTS[p.name].footwear for p in garments]
         for k, part in enumerate(garments):  # shoes are no one's inner layer; the outermost needs no surface
             part.inner = clothes[k] and any(clothes[k + 1:])
+        # heels: the pose holds the feet pitched on them (compose's clips carry it)
+        self.heels: tuple[HeelPitch, ...] = heel_pitches(body, self.regions, shoes[0]) if shoes else ()
         self._build_eyes()
         self._build_mouth()
         self._build_brows_and_lashes()
@@ -310,6 +313,13 @@ class LayeredHuman:
     @property
     def skeleton(self):
         return self.body.skeleton
+
+    def standing(self) -> tuple[np.ndarray, np.ndarray]:
+        """The rest pose as the subject stands in its shoes: local rotations (J, 3, 3), the feet
+        pitched on their heels (``heels``), and a root translation (3,) that keeps the soles on
+        the ground (up by the balls' drop; zero in flat shoes)."""
+        rot = pitch_feet(np.broadcast_to(np.eye(3), (len(self.skeleton), 3, 3)), self.heels)
+        return rot, np.array([0.0, max((h.drop for h in self.heels), default=0.0), 0.0])
 
     def _transforms(self, rotations, root_translation):
         if rotations is not None:

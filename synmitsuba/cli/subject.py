@@ -141,9 +141,9 @@ def _built_subject(seed: int, cloth: str = "skinned"):
 
 
 def _rest(human):
-    """One frame of the rest pose: rotations (1, J, 3, 3), root (1, 3)."""
-    J = len(human.skeleton)
-    return np.broadcast_to(np.eye(3), (1, J, 3, 3)).copy(), np.zeros((1, 3))
+    """One frame of the rest pose as the subject stands in its shoes: rotations (1, J, 3, 3), root (1, 3)."""
+    rot, root = human.standing()
+    return rot[None], root[None]
 
 
 def _rest_motion(human):

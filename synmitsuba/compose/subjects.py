@@ -20,6 +20,7 @@ from synmitsuba.compose.instances import first_subject_instance, scene_instances
 from synmitsuba.compose.placement import envelope, frame_boxes, frame_hulls
 from synmitsuba.errors import ConfigError
 from synmitsuba.motion.faces import EXPRESSIONS, FaceTrack, fixed_face, sample_face, with_face
+from synmitsuba.body.shoes import pitch_feet
 from synmitsuba.motion.hands import BEHAVIOURS, HandKey, HandTrack, sample_hands, with_hands
 from synmitsuba.motion.motion import Motion
 from synmitsuba.motion.sources import check_motion_source
@@ -179,8 +180,16 @@ def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) ->
 
 
 def retargeted_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> Motion:
+    """The subject's clip on its skeleton, its feet held as its shoes hold them."""
     from synmitsuba.motion.retargeting import retarget
-    return retarget(motion.clip(where), human.skeleton)
+    return with_heels(retarget(motion.clip(where), human.skeleton), human.heels)
+
+
+def with_heels(motion: Motion, heels) -> Motion:
+    """The clip with each foot pitched on its heel (``body.shoes.HeelPitch``, one per foot) at
+    every frame, the toes turned back flat; unchanged for none. The pitch is in the clip's
+    rotations, so the pose labels hold the feet as they are rendered."""
+    return replace(motion, rotations=pitch_feet(motion.rotations, heels)) if heels else motion
 
 
 def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) -> PlacedSubject:
