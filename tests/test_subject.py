@@ -1233,13 +1233,154 @@ def test_skirts_and_dresses_are_drawn_cuts_and_nothing_else_is():
     seen = set()
     for i in range(300):
         for g in sm.sample_subject(np.random.default_rng(i)).garments:
-            assert (g.cut in SKIRT_CUTS) if GARMENTS[g.kind].skirted else g.cut is None, (i, g.kind, g.cut)
+            cut = GARMENTS[g.kind].skirted and not GARMENTS[g.kind].cut  # a shift has its own
+            assert (g.cut in SKIRT_CUTS) if cut else g.cut is None, (i, g.kind, g.cut)
             seen.add(g.cut)
     assert len(seen - {None}) >= 3
     g = GarmentParams(kind="skirt")
     assert sample_skirt_cut(g).cut == sample_skirt_cut(g).cut and sample_skirt_cut(g).texture == g.texture
     with pytest.raises(ValueError, match=r"garments\[0\]\.cut.*'godet'"):
         sm.SubjectRecipe.from_dict({"garments": [{"kind": "skirt", "cut": "godet"}]})
+
+
+def _dressed(outfit: list, seed: int = 3):
+    recipe = sm.sample_subject(np.random.default_rng(seed), {"outfit": outfit, "jacket": False, "shoes": False,
+                                                             "accessories": [], "texture_size": 64})
+    h = sm.build_subject(recipe)
+    return h, {p.name: p for p in h.parts}
+
+
+def test_a_tank_top_leaves_the_arms_bare_but_for_a_strap_over_each_shoulder():
+    """Measured on the built mesh: no tank vertex is closest to an arm vertex a third of the way
+    down the arm (the inner arm lies against the chest under the armpit), and none lies out past
+    the shoulder joint over the armpit; over the shoulders (3 cm under the joints' height and 7 cm
+    under the neck's base, and up) the tank is one
+    strap a side, at most 5 cm wide, between the neck and the shoulder joint, running from the
+    front over to the back; at the front and the back its top is a scoop 8 cm or more under the
+    neck's base."""
+    from scipy.spatial import cKDTree
+    from synmitsuba.body.garments import TANK_STRAP
+    h, parts = _dressed(["tank", "shorts"])
+    r, tank = h.regions, parts["tank"].rest
+    _, near = cKDTree(h.body.vertices).query(tank)
+    assert r.arm_s[near].max() < 0.3
+    ax, nz = np.abs(tank[:, 0] - r.neck_xz[0]), r.neck_xz[1]
+    assert ax[tank[:, 1] > r.shoulder[1] - 0.05].max() < r.shoulder[0]
+    over = tank[:, 1] > max(r.shoulder[1] - 0.03, r.neck_y - 0.07)
+    for side in (1, -1):
+        strap = tank[over & (np.sign(tank[:, 0] - r.neck_xz[0]) == side)]
+        a = np.abs(strap[:, 0] - r.neck_xz[0])
+        assert np.ptp(a) < 2 * TANK_STRAP + 0.015 and r.neck_radius < a.min() and a.max() < r.shoulder[0]
+        assert strap[:, 2].min() < nz - 0.03 and strap[:, 2].max() > nz + 0.03  # front to back
+    centre = ax < 0.03
+    for front in (True, False):
+        mid = tank[centre & ((tank[:, 2] > nz) == front)]
+        assert mid[:, 1].max() < r.neck_y - 0.08
+
+
+def test_a_coat_opens_in_a_v_over_the_top_and_hangs_to_the_knees():
+    """The coat's front: nothing within 2 cm of the centre line at mid-chest (the V shows the top
+    under it, which is there), closed again 35 cm under the neck; its hem 30 cm or more under
+    the hips; every coat vertex outside the t-shirt's and the trousers' surfaces' reach from the
+    body (the layers nest)."""
+    h, parts = _dressed(["tshirt", "trousers", "coat"])
+    r, coat, shirt = h.regions, parts["coat"].rest, parts["tshirt"].rest
+    nx, nz = r.neck_xz
+    def front_centre(v, y):
+        return v[(np.abs(v[:, 1] - y) < 0.015) & (v[:, 2] > nz) & (np.abs(v[:, 0] - nx) < 0.02)]
+    assert len(front_centre(coat, r.neck_y - 0.12)) == 0 and len(front_centre(shirt, r.neck_y - 0.12)) > 0
+    assert len(front_centre(coat, r.neck_y - 0.35)) > 0
+    assert coat[:, 1].min() < r.hip_y - 0.3
+    d = {k: signed_distance(h.body.vertices, h.body.faces, parts[k].rest) for k in ("tshirt", "trousers", "coat")}
+    assert np.median(d["coat"]) > np.median(d["tshirt"]) and np.median(d["coat"]) > np.median(d["trousers"])
+
+
+def test_a_shift_is_straight_and_sleeveless_a_wrap_opens_in_a_v_and_a_jumpsuit_is_one_piece():
+    """A shift: no vertex nearest an arm past the shoulder (arm_s > 0.3), its skirt's radius at
+    the hem within 6 cm of its radius at the hips (an A-line of the same length flares more); a
+    wrap: nothing within 2 cm of the front centre 10 cm under the neck, cloth there at the back;
+    a jumpsuit: one connected surface covering the chest, both thighs and both shins."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+    for kind in ("shift", "wrap"):
+        h, parts = _dressed([kind])
+        r, v = h.regions, parts[kind].rest
+        if kind == "shift":
+            _, near = cKDTree(h.body.vertices).query(v)
+            assert r.arm_s[near].max() < 0.3
+            def spread(y):
+                ring = v[np.abs(v[:, 1] - y) < 0.02]
+                return np.ptp(ring[:, 0]) / 2
+            low = v[:, 1].min() + 0.03
+            assert spread(low) - spread(r.hip_y - 0.05) < 0.06
+        else:
+            y = r.neck_y - 0.1
+            band = v[np.abs(v[:, 1] - y) < 0.015]
+            ax = np.abs(band[:, 0] - r.neck_xz[0])
+            assert not ((ax < 0.02) & (band[:, 2] > r.neck_xz[1])).any()
+            assert ((ax < 0.02) & (band[:, 2] < r.neck_xz[1])).any()
+    h, parts = _dressed(["jumpsuit"])
+    p = parts["jumpsuit"]
+    from synmitsuba.body.topology import weld
+    ids = weld(p.rest)[p.faces]
+    n = len(p.rest)
+    adj = sp.coo_matrix((np.ones(ids.size), (ids.ravel(), np.roll(ids, 1, 1).ravel())), shape=(n, n))
+    _, label = connected_components(adj, directed=False)
+    used = np.unique(ids)
+    assert len(np.unique(label[used])) == 1
+    _, near = cKDTree(p.rest).query(h.body.vertices)
+    dist = np.linalg.norm(p.rest[near] - h.body.vertices, axis=1)
+    r = h.regions
+    for group, s in (("torso", None), ("upperleg", (0.2, 0.6)), ("lowerleg", (0.3, 0.6))):
+        mask = r.group == group
+        if s:
+            mask &= (r.leg_s > s[0]) & (r.leg_s < s[1])
+        else:
+            mask &= np.abs(h.body.vertices[:, 1] - (r.neck_y - 0.25)) < 0.05
+        for side in (1, -1):
+            m = mask & (np.sign(h.body.vertices[:, 0]) == side)
+            assert np.median(dist[m]) < 0.04, (group, side)
+
+
+def test_drawn_outfits_come_in_styles_and_named_ones_as_named():
+    """300 sampled subjects: each style is drawn near its share of its kind's garments; jeans
+    are denim, coats wool, sweaters knitted; a coat only over trousers (its skirt would cut
+    through a skirt); a style changes a garment's kind and texture, nothing else; an outfit
+    named in the config is worn as named."""
+    import dataclasses
+    from synmitsuba.body.garments import DENIM, GARMENT_STYLES, WOOL, sample_style
+    counts: dict = {}
+    for i in range(300):
+        r = sm.sample_subject(np.random.default_rng(i))
+        kinds = [g.kind for g in r.garments]
+        for g in r.garments:
+            counts[g.kind] = counts.get(g.kind, 0) + 1
+            if g.kind == "jeans":
+                assert list(g.texture.base_lab) in [list(map(float, c)) for c in DENIM]
+            if g.kind == "coat":
+                assert list(g.texture.base_lab) in [list(map(float, c)) for c in WOOL]
+                assert "jeans" in kinds or "trousers" in kinds
+            if g.kind == "sweater":
+                assert g.texture.bump == "knit"
+    for base, styles in GARMENT_STYLES.items():
+        for st in styles:
+            total = counts.get(base, 0) + sum(counts.get(x.kind, 0) for x in styles)
+            if st.kind != "coat":  # a coat's share is of jackets over trousers only
+                sigma = np.sqrt(st.share * (1 - st.share) / total)  # a binomial share's spread
+                assert abs(counts.get(st.kind, 0) / total - st.share) < 3 * sigma + 0.02, (st.kind, counts)
+            assert counts.get(st.kind, 0) > 0
+    g = sm.sample_subject(np.random.default_rng(0)).garments[0]
+    for kind in ("tshirt", "longsleeve", "trousers"):
+        styled = [sample_style(dataclasses.replace(g, kind=kind, texture=dataclasses.replace(g.texture, seed=s)),
+                               [kind]) for s in range(40)]
+        assert {x.kind for x in styled} == {kind} | {st.kind for st in GARMENT_STYLES[kind]}
+        for x in styled:
+            assert (x.size, x.ease, x.length, x.thickness, x.texture.seed) == (g.size, g.ease, g.length, g.thickness,
+                                                                               x.texture.seed)
+    for i in range(20):
+        r = sm.sample_subject(np.random.default_rng(i), {"outfit": ["tshirt", "trousers", "longsleeve"]})
+        assert [x.kind for x in r.garments][:3] == ["tshirt", "trousers", "longsleeve"]
 
 
 def test_a_skirt_hangs_from_both_legs_through_a_stride():

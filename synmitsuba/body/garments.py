@@ -81,6 +81,41 @@ def _neckline(r, v: np.ndarray) -> np.ndarray:
     return np.minimum(either, r.neck_y + NECK_TOP - v[:, 1])
 
 
+TANK_STRAP = 0.018    # metres: half a tank top's strap's width
+TANK_SCOOP = 0.1      # metres under the neck's base its neckline reaches, at the front and the back
+TANK_ARMHOLE = 0.075  # and its armholes under the shoulder joints
+
+
+def _tank(g, r, v):
+    """A tank top: a top without sleeves, cut at the front and the back to a scoop and at the
+    sides to the armholes, a strap over each shoulder half-way from the neck to the joint."""
+    base = _top(lambda L: -0.1)(g, r, v)
+    ax = np.abs(v[:, 0] - r.neck_xz[0])
+    strap_x = r.neck_radius + NECK_EASE + 0.35 * (r.shoulder[0] - r.neck_radius - NECK_EASE)
+    strap = TANK_STRAP - np.abs(ax - strap_x)
+    level = np.where(ax < strap_x, r.neck_y - TANK_SCOOP, r.shoulder[1] - TANK_ARMHOLE)  # the step hides in the strap
+    return np.minimum(base, np.maximum(strap, level - v[:, 1]))
+
+
+OPEN_FRONT = (0.26, 0.035)  # metres: how far under the neck's base a coat's front opening closes, and
+# how far past the neck's radius it opens either side at the neck
+WRAP_V = (0.17, 0.02)       # and a wrap dress's V neckline
+
+
+def _open_front(region: Callable, v_shape: tuple[float, float] = OPEN_FRONT) -> Callable:
+    """``region`` with a V opening down the front from the neck, ``v_shape`` (depth under the
+    neck's base, width past the neck's radius at it): a coat's lapels parted over the top under
+    it, a wrap dress's neckline."""
+    depth, width = v_shape
+
+    def opened(g, r, v):
+        ax = np.abs(v[:, 0] - r.neck_xz[0])
+        rise = np.clip((v[:, 1] - (r.neck_y - depth)) / depth, 0.0, 1.0)
+        gap = np.maximum(ax - rise * (r.neck_radius + width), -r.normals[:, 2])  # where the body faces forward
+        return np.minimum(region(g, r, v), gap)
+    return opened
+
+
 def _bottom(reach: Callable[[float], float]):
     """Below the waist, the legs to ``reach(length)`` (0 hip .. 1 ankle)."""
     def region(g, r, v):
@@ -88,6 +123,11 @@ def _bottom(reach: Callable[[float], float]):
         phi = np.where(legs, (reach(g.length) - r.leg_s) * r.leg_length, np.where(r.group == "torso", 1.0, -1.0))
         return np.minimum(phi, r.waist_y - v[:, 1])
     return region
+
+
+def _union(*regions: Callable) -> Callable:
+    """What any of ``regions`` covers."""
+    return lambda g, r, v: np.max([region(g, r, v) for region in regions], axis=0)
 
 
 def _feet(g, r, v):
@@ -116,6 +156,7 @@ class GarmentKind:
     tucks_tops: bool = False      # tops worn with it end tucked under the waist
     takes_jacket: bool = True     # a sampled jacket may go over it
     material: Callable | None = None  # (params, texture size) -> Material; None: garment_material
+    cut: str | None = None        # a flare's cut (SKIRT_CUTS) when the garment names none; None: a_line
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
@@ -126,14 +167,32 @@ GARMENTS: dict[str, GarmentKind] = {
                               fabric="jersey"),
     "jacket": GarmentKind(Layer.TOP, 0.03, 3, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
                           (0.005, 0.03), (0.002, 0.01), fabric="twill"),
+    "tank": GarmentKind(Layer.TOP, 0.01, 2, "shell", _tank, (0.25, 0.7), fabric="jersey"),
+    "sweater": GarmentKind(Layer.TOP, 0.018, 2, "shell", _top(lambda L: 0.92 + 0.06 * L), (0.45, 0.8),
+                           (0.01, 0.03), (0.004, 0.008), fabric="jersey"),
+    # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
+    "coat": GarmentKind(Layer.TOP, 0.025, 3, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
+                        (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
     "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
                             fabric="twill"),
     "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
                               fabric="twill"),
+    "jeans": GarmentKind(Layer.BOTTOM, 0.004, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                         (0.0, 0.012), fabric="twill"),
     "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
                          tucks_tops=True),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
                          (0.005, 0.03), skirted=True, takes_jacket=False),
+    # a shift: sleeveless, straight, to the knees; a wrap: a V neckline, elbow sleeves, flared
+    "shift": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: -0.1, dress=True), (0.3, 0.6),
+                         (0.005, 0.02), skirted=True, takes_jacket=False, cut="straight"),
+    "wrap": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _open_front(_top(lambda L: 0.3 + 0.2 * L, dress=True),
+                                                                        WRAP_V), (0.35, 0.9), (0.005, 0.03),
+                        skirted=True, takes_jacket=False),
+    # a one-piece from the neck to the ankles: a top's torso and sleeves and trousers' legs
+    "jumpsuit": GarmentKind(Layer.DRESS, 0.01, 2, "shell", _union(_top(lambda L: 0.1 + 0.8 * L),
+                                                                    _bottom(lambda L: 0.9 + 0.12 * L)),
+                            (0.0, 1.0), (0.005, 0.02), fabric="twill", takes_jacket=False),
     "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none", footwear=True),
     # built round the foot (body/shoes.py); thickness is the sole's height, length the collar's (and shaft's)
     **{name: GarmentKind(Layer.SHOES, ALLOWANCE, 0, "heeled" if SHOE_STYLES[name].heel[1] else "shoe", None,
@@ -235,6 +294,7 @@ class BodyRegions:
     neck_y: float
     neck_xz: tuple = (0.0, 0.0)  # the neck's axis (x, z) just above its base
     neck_radius: float = 0.06    # and its radius there (75th percentile: the outer surface)
+    shoulder: tuple = (0.17, 1.4)  # the shoulder joints' |x| from the neck's axis and height, metres
 
 
 def body_regions(body) -> BodyRegions:
@@ -263,18 +323,86 @@ def body_regions(body) -> BodyRegions:
     return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s, float(np.mean(arm_len)), float(np.mean(leg_len)),
                        waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y, crotch_y=hip_y - 0.07,
                        neck_y=neck_y, neck_xz=(float(centre[0]), float(centre[1])),
-                       neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)))
+                       neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)),
+                       shoulder=(float(np.mean([abs(sk.rest_positions[sk.index(f"upperarm01.{s}"), 0] - centre[0])
+                                                for s in "LR"])), float(sk.rest_positions[sk.index("upperarm01.L"), 1])))
 
 
 def sample_skirt_cut(g: GarmentParams) -> GarmentParams:
     """``g`` with a cut from ``SKIRT_CUTS`` (by share) when it is a skirt or a dress, drawn from
     its texture seed (so the subject's other draws are the ones they were before skirts had cuts)."""
-    if not GARMENTS[g.kind].skirted:
+    if not GARMENTS[g.kind].skirted or GARMENTS[g.kind].cut:  # a kind with its own cut keeps it
         return g
     rng = np.random.default_rng([g.texture.seed, 11])
     names = [k for k, c in SKIRT_CUTS.items() if c.share > 0]
     share = np.array([SKIRT_CUTS[k].share for k in names])
     return dataclasses.replace(g, cut=names[int(rng.choice(len(names), p=share / share.sum()))])
+
+
+DENIM = ([26, 3, -24], [34, 2, -27], [45, 0, -25], [58, -2, -20], [70, -3, -14], [20, 0, -4], [14, 0, 0])
+
+
+def _denim(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """Jeans: indigo denim from dark rinse to light wash (or black), plain, a faint mottled wash."""
+    base = DENIM[int(rng.integers(len(DENIM)))]
+    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
+                               bump_amplitude=round(float(rng.uniform(0.15, 0.35)), 3), bump_scale=40.0)
+
+
+def _knitted(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """A sweater: its colour (and any stripes or checks) knitted, the loops over it; no print."""
+    return dataclasses.replace(t, decal="none", bump="knit", bump_amplitude=round(float(rng.uniform(0.5, 0.9)), 3),
+                               bump_scale=round(float(rng.uniform(25, 45)), 3))
+
+
+WOOL = ([60, 8, 28], [15, 0, 0], [30, 0, -2], [22, 3, -20], [50, 0, -2], [40, -6, 18], [28, 25, 8], [72, 3, 15])
+
+
+def _wool(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """A coat: plain wool in a coat's colours (camel, black, charcoal, navy, grey, olive,
+    burgundy, beige), no print."""
+    base = WOOL[int(rng.integers(len(WOOL)))]
+    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
+                               bump_amplitude=round(float(rng.uniform(0.1, 0.3)), 3), bump_scale=60.0)
+
+
+@dataclass(frozen=True)
+class Style:
+    """A garment kind a sampled garment of another kind may be made as instead (``GARMENT_STYLES``):
+    ``share`` of them, when ``worn_with(outfit)``; ``texture(params, rng)`` restyles its texture."""
+
+    kind: str
+    share: float
+    texture: Callable | None = None
+    worn_with: Callable[[list], bool] = lambda outfit: True
+
+
+# A sampled kind's other styles (the rest of its share stays the kind itself): a new style is a
+# garment kind (GARMENTS) and a line here.
+GARMENT_STYLES: dict[str, tuple[Style, ...]] = {
+    "tshirt": (Style("tank", 0.25),),
+    "longsleeve": (Style("sweater", 0.3, _knitted),),
+    "trousers": (Style("jeans", 0.45, _denim),),
+    "jacket": (Style("coat", 0.35, _wool, worn_with=lambda outfit: "trousers" in outfit),),  # its skirt over trousers only
+    "dress": (Style("shift", 0.25), Style("wrap", 0.25), Style("jumpsuit", 0.15)),
+}
+_STYLE_OF = {st.kind: st for styles in GARMENT_STYLES.values() for st in styles}
+
+
+def sample_style(g: GarmentParams, outfit, draw: bool = True) -> GarmentParams:
+    """``g`` made in one of its kind's ``GARMENT_STYLES`` (by share; with ``draw``) or left as it is,
+    drawn from its texture seed (so the subject's other draws are the ones they were before
+    styles); a style's texture restyled (also when the outfit named the style itself)."""
+    rng = np.random.default_rng([g.texture.seed, 13])
+    styles = [st for st in GARMENT_STYLES.get(g.kind, ()) if st.worn_with(list(outfit))] if draw else []
+    if styles:
+        p = np.array([1.0 - sum(st.share for st in GARMENT_STYLES[g.kind])] + [st.share for st in styles])
+        pick = int(rng.choice(len(p), p=p / p.sum()))
+        if pick:  # a kind with its own cut (a shift's straight skirt) drops a drawn one
+            kind = styles[pick - 1].kind
+            g = dataclasses.replace(g, kind=kind, cut=None if GARMENTS[kind].cut or not GARMENTS[kind].skirted else g.cut)
+    style = _STYLE_OF.get(g.kind)
+    return dataclasses.replace(g, texture=style.texture(g.texture, rng)) if style and style.texture else g
 
 
 def _folds(cut: SkirtCut, ang: np.ndarray, t: float) -> np.ndarray:
@@ -290,7 +418,7 @@ def _folds(cut: SkirtCut, ang: np.ndarray, t: float) -> np.ndarray:
 def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float):
     """A skirt surface from top_y down, widening outwards by its cut (``SKIRT_CUTS``), outside
     every body vertex it passes."""
-    cut = SKIRT_CUTS[g.cut or "a_line"]
+    cut = SKIRT_CUTS[g.cut or GARMENTS[g.kind].cut or "a_line"]
     n_seg = 48 if not cut.folds else 6 * cut.folds  # six points a fold
     v = body.vertices[np.isin(r.group, ["torso", "upperleg", "lowerleg"])]  # not the hanging arms
     bottom = r.hip_y - 0.1 - (r.hip_y - 0.1 - 0.15) * g.length
@@ -618,14 +746,17 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
 def hem_sources(m: GarmentMesh) -> np.ndarray:
     """The edge vertex each vertex of ``m``'s hem band was turned in from (``hem`` appends the
     band last, its faces as ``[b, a, inner(a)]`` for every open edge (a, b), then the other
-    half of each quad), in band order; empty for a garment without a hem."""
+    half of each quad, ``[b, inner(a), inner(b)]``), in band order; empty for a garment without a hem."""
     n_faces, n_vertices = m.hem
     if not n_vertices:
         return np.zeros(0, np.int64)
-    first = m.faces[len(m.faces) - n_faces:][:n_faces // 2]
+    band = m.faces[len(m.faces) - n_faces:]
+    first, second = band[:n_faces // 2], band[n_faces // 2:]
     source = np.full(n_vertices, -1, np.int64)
-    source[first[:, 2] - (len(m.vertices) - n_vertices)] = first[:, 1]
-    assert (source >= 0).all()  # every band vertex is some open edge's inner(a)
+    base = len(m.vertices) - n_vertices
+    source[second[:, 2] - base] = second[:, 0]  # inner(b) from b: an opening's end where a uv seam crosses it
+    source[first[:, 2] - base] = first[:, 1]    # is some edge's b but no edge's a
+    assert (source >= 0).all()  # every band vertex is some open edge's inner(a) or inner(b)
     return source
 
 

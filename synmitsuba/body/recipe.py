@@ -11,7 +11,8 @@ from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_access
 from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES, height_for_stature, measures, shape_calibration
 from synmitsuba.body.brows import BrowParams, sample_brows
 from synmitsuba.body.eyes import EyeParams, sample_eyes
-from synmitsuba.body.garments import GARMENTS, OUTFITS, GarmentParams, sample_footwear, sample_garment, sample_skirt_cut
+from synmitsuba.body.garments import (GARMENTS, OUTFITS, GarmentParams, sample_footwear, sample_garment, sample_skirt_cut,
+                                      sample_style)
 from synmitsuba.body.hair import STYLES, HairParams, sample_hair
 from synmitsuba.body.textures import SkinParams, sample_lab_colour, sample_skin
 from synmitsuba.errors import ConfigError
@@ -183,6 +184,8 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
         outfit.append("shoes")
     garments = [sample_garment(k, rng) for k in outfit]
     garments = [sample_skirt_cut(sample_footwear(g, outfit) if g.kind == "shoes" else g) for g in garments]
+    # a drawn outfit's garments in their drawn styles; an outfit named in the config is worn as named
+    garments = [sample_style(g, outfit, draw=g.kind not in (cfg.outfit or ())) for g in garments]
     anny_anchors, year_anchors = shape_calibration()["age"]
     hair = sample_hair(rng, "female" if pheno["gender"] >= 0.5 else "male",  # anny: gender 0 is male, 1 female
                        float(np.interp(pheno["age"], anny_anchors, year_anchors)))

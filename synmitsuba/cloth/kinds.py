@@ -37,6 +37,8 @@ def top(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
 CLOTH_KINDS: dict[str, ClothKind] = {
     "skirt": ClothKind("woven", top(0.02)),  # hangs from its waistband
     "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
+    "shift": ClothKind("woven", above("hip_y", 0.02)),
+    "wrap": ClothKind("jersey", above("hip_y", 0.02)),
 }
 
 
