@@ -62,11 +62,24 @@ def bone_children(sk: Skeleton, canon: dict[str, str]) -> dict[int, int]:
 
 
 def tpose_globals(sk: Skeleton, canon: dict[str, str]) -> np.ndarray:
-    """Global rotations (J, 3, 3) that put ``sk`` into the canonical humanoid's T-pose."""
+    """Global rotations (J, 3, 3) that put ``sk`` into the canonical humanoid's T-pose.
+
+    The feet (each ankle and everything below it) keep their rest orientation: every rest pose
+    we read stands flat-footed, while bone directions differ by skeleton (anny's ankle-to-toe
+    slopes 19 degrees, the humanoid's 26.6), and aligning them would hold a target's feet
+    toe-down by the difference at every frame."""
     ref = humanoid_skeleton()
     bones = {i: (j, ref.rest_positions[ref.index(BONE_CHILD[canon[sk.names[i]]])] -
                  ref.rest_positions[ref.index(canon[sk.names[i]])]) for i, j in bone_children(sk, canon).items()}
-    return aligned_globals(sk, bones)
+    G = aligned_globals(sk, bones)
+    G[_feet(sk, canon)] = np.eye(3)
+    return G
+
+
+def _feet(sk: Skeleton, canon: dict[str, str]) -> list[int]:
+    """Each ankle joint and all its descendants."""
+    ankles = [i for i, n in enumerate(sk.names) if canon.get(n, "").endswith("_ankle")]
+    return [j for j in range(len(sk)) if any(_descendant(sk, a, j) for a in ankles)]
 
 
 def pelvis_height(sk: Skeleton, root: int = 0) -> float:
