@@ -359,3 +359,26 @@ def test_pose_between_frames_is_the_slerp_of_its_neighbours():
     assert np.allclose(root, 0.7 * m.root_translation[3] + 0.3 * m.root_translation[4])
     assert np.array_equal(m.at(3)[0], m.rotations[3]) and np.array_equal(m.at(-1.0)[1], m.root_translation[0])
     assert np.array_equal(m.at(m.n_frames + 2.5)[0], m.rotations[-1])
+
+
+@pytest.mark.parametrize("kind", ["idle", "walk", "run"])
+def test_retargeted_feet_pitch_as_the_source_feet_do_from_their_flat_rests(kind):
+    """Both rest poses stand flat-footed: anny's ankle-to-middle-toe line is as far from its rest
+    slope at every frame as the humanoid source's ankle-to-toe line is from its own (their rest
+    slopes differ, 19 against 26.6 degrees, which the T-pose must not turn into a toe-down tilt)."""
+    from synmitsuba.body.anny_model import anny_body
+    src = sm.procedural_motion(kind, np.random.default_rng(2), seconds=1.0)
+    anny = anny_body().skeleton
+    out = sm.retarget(src, anny)
+
+    def pitch(motion, a, b):
+        p = motion.joint_positions()
+        rest = motion.skeleton.rest_positions
+        i, j = motion.skeleton.index(a), motion.skeleton.index(b)
+        slope = [np.degrees(np.arctan2(-d[..., 1], np.hypot(d[..., 0], d[..., 2])))
+                 for d in (p[:, j] - p[:, i], rest[j] - rest[i])]
+        return slope[0] - slope[1]
+    for s in ("l", "r"):
+        side = "L" if s == "l" else "R"
+        np.testing.assert_allclose(pitch(out, f"foot.{side}", f"toe3-1.{side}"),
+                                   pitch(src, f"{s}_ankle", f"{s}_toe"), atol=0.05)
