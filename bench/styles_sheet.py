@@ -10,7 +10,9 @@ import argparse
 import numpy as np
 
 OUTFITS = (("tank", "jeans", "sneakers"), ("sweater", "trousers", "boots"), ("tshirt", "jeans", "coat", "dress_shoes"),
-           ("shift", "heels"), ("wrap", "sandals"), ("jumpsuit", "sneakers"), ("tshirt", "skirt", "heels"))
+           ("shift", "heels"), ("wrap", "sandals"), ("jumpsuit", "sneakers"), ("tshirt", "skirt", "heels"),
+           ("shirt", "chinos", "blazer", "dress_shoes"), ("tshirt", "joggers", "sneakers"),
+           ("shirt", "jeans", "boots"))
 
 
 def main() -> int:
@@ -36,7 +38,7 @@ def main() -> int:
                                     fov_y_deg=36, width=200, height=340)
             centre_backdrop(scene, cam.center)
             images.append(sm.to_srgb8(sm.render(scene, cam, spp=args.spp, seed=k).rgb))
-    print(sm.write_png(args.out, sm.contact_sheet(images, columns=7)))
+    print(sm.write_png(args.out, sm.contact_sheet(images, columns=6)))
     return 0
 
 

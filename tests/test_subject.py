@@ -289,11 +289,12 @@ def test_necklines_run_round_the_neck_without_a_step():
 def test_garment_edges_follow_smooth_curves():
     """Hems, cuffs and necklines are cut along their region's level set: their loops turn less
     than half as much per metre as the same regions cut along the body's triangle edges; each
-    opening is turned in by the cloth's thickness (its edge lies that much nearer the body)."""
+    opening is turned in by the cloth's thickness (its edge lies that much nearer the body).
+    Unstyled: an open front's V (a blazer's) has corners by design."""
     from synmitsuba.body.garments import GARMENTS
     cut, edge = [], []
     for seed in range(4):
-        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64}))
+        h = sm.build_subject(_unstyled(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64})))
         for g in h.garments:
             kind = GARMENTS[g.params.kind]
             if kind.shape != "shell":
@@ -514,8 +515,8 @@ def test_hair_and_accessories_follow_the_head(human):
 
 @pytest.fixture(scope="module")
 def long_haired():
-    return sm.build_subject(sm.sample_subject(np.random.default_rng(3), {"hair_style": "long", "accessories": [],
-                                                                       "jacket": True, "texture_size": 64}))
+    return sm.build_subject(_unstyled(sm.sample_subject(np.random.default_rng(3), {"hair_style": "long", "accessories": [],
+                                                                                 "jacket": True, "texture_size": 64})))
 
 
 def _head_turns(sk):
@@ -1306,6 +1307,47 @@ def test_a_coat_opens_in_a_v_over_the_top_and_hangs_to_the_knees():
     assert np.median(d["coat"]) > np.median(d["tshirt"]) and np.median(d["coat"]) > np.median(d["trousers"])
 
 
+def test_a_blazer_opens_in_a_v_to_its_buttons_and_ends_at_the_hips_and_joggers_above_the_ankles():
+    """The blazer's front: nothing within 2 cm of the centre line 24 cm under the neck (the top
+    under it shows there), closed 42 cm under it; its hem between the crotch and the waist; its
+    median distance from the body past the long sleeve's under it. Joggers end above the ankle
+    joint, where trousers on the same body reach past it."""
+    h, parts = _dressed(["longsleeve", "joggers", "blazer"])
+    r, blazer, shirt = h.regions, parts["blazer"].rest, parts["longsleeve"].rest
+    nx, nz = r.neck_xz
+    def front_centre(v, y):
+        return v[(np.abs(v[:, 1] - y) < 0.015) & (v[:, 2] > nz) & (np.abs(v[:, 0] - nx) < 0.02)]
+    assert len(front_centre(blazer, r.neck_y - 0.24)) == 0 and len(front_centre(shirt, r.neck_y - 0.24)) > 0
+    assert len(front_centre(blazer, r.neck_y - 0.42)) > 0
+    assert r.crotch_y - 0.15 < blazer[:, 1].min() < r.waist_y
+    d = {k: signed_distance(h.body.vertices, h.body.faces, parts[k].rest) for k in ("longsleeve", "blazer")}
+    assert np.median(d["blazer"]) > np.median(d["longsleeve"])
+    ankle = h.skeleton.rest_positions[h.skeleton.index("foot.L"), 1]
+    assert parts["joggers"].rest[:, 1].min() > ankle
+    _, trousers = _dressed(["longsleeve", "trousers"])
+    assert trousers["trousers"].rest[:, 1].min() < ankle
+
+
+def test_a_shirt_has_a_collar_standing_round_the_neck_and_open_at_the_front():
+    """Measured on the built mesh against the body's own neck: behind the neck (more than 150
+    degrees from straight ahead round its axis) the shirt rises 2.5 cm or more over a t-shirt's
+    crew neckline on the same body; every shirt vertex over the neck's base is outside the body
+    (positive signed distance) and none is within the front's opening (less than 20 degrees
+    either side of straight ahead)."""
+    h, parts = _dressed(["shirt", "trousers"])
+    r, shirt = h.regions, parts["shirt"].rest
+    nx, nz = r.neck_xz
+    dx, dz = shirt[:, 0] - nx, shirt[:, 2] - nz
+    up = shirt[:, 1] > r.neck_y
+    assert signed_distance(h.body.vertices, h.body.faces, shirt[up]).min() > 0
+    assert not (up & (np.abs(np.degrees(np.arctan2(dx, dz))) < 20)).any()
+    _, tee = _dressed(["tshirt", "trousers"])
+
+    def behind(v):
+        return v[np.abs(np.degrees(np.arctan2(v[:, 0] - nx, v[:, 2] - nz))) > 150, 1].max()
+    assert behind(shirt) > behind(tee["tshirt"].rest) + 0.025
+
+
 def test_a_shift_is_straight_and_sleeveless_a_wrap_opens_in_a_v_and_a_jumpsuit_is_one_piece():
     """A shift: no vertex nearest an arm past the shoulder (arm_s > 0.3), its skirt's radius at
     the hem within 6 cm of its radius at the hips (an A-line of the same length flares more); a
@@ -1356,22 +1398,22 @@ def test_a_shift_is_straight_and_sleeveless_a_wrap_opens_in_a_v_and_a_jumpsuit_i
 
 def test_drawn_outfits_come_in_styles_and_named_ones_as_named():
     """300 sampled subjects: each style is drawn near its share of its kind's garments; jeans
-    are denim, coats wool, sweaters knitted; a coat only over trousers (its skirt would cut
+    are denim, chinos, joggers, coats and blazers in their palettes, sweaters knitted; a coat only over trousers (its skirt would cut
     through a skirt); a style changes a garment's kind and texture, nothing else; an outfit
     named in the config is worn as named."""
     import dataclasses
-    from synmitsuba.body.garments import DENIM, GARMENT_STYLES, WOOL, sample_style
+    from synmitsuba.body.garments import CHINO, DENIM, GARMENT_STYLES, HEATHER, SHIRTING, SUITING, WOOL, sample_style
+    palettes = {"jeans": DENIM, "coat": WOOL, "chinos": CHINO, "joggers": HEATHER, "blazer": SUITING, "shirt": SHIRTING}
     counts: dict = {}
     for i in range(300):
         r = sm.sample_subject(np.random.default_rng(i))
         kinds = [g.kind for g in r.garments]
         for g in r.garments:
             counts[g.kind] = counts.get(g.kind, 0) + 1
-            if g.kind == "jeans":
-                assert list(g.texture.base_lab) in [list(map(float, c)) for c in DENIM]
+            if g.kind in palettes:
+                assert list(g.texture.base_lab) in [list(map(float, c)) for c in palettes[g.kind]]
             if g.kind == "coat":
-                assert list(g.texture.base_lab) in [list(map(float, c)) for c in WOOL]
-                assert "jeans" in kinds or "trousers" in kinds
+                assert {"jeans", "trousers", "chinos", "joggers"} & set(kinds)
             if g.kind == "sweater":
                 assert g.texture.bump == "knit"
     for base, styles in GARMENT_STYLES.items():

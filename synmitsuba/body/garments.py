@@ -100,6 +100,7 @@ def _tank(g, r, v):
 OPEN_FRONT = (0.26, 0.035)  # metres: how far under the neck's base a coat's front opening closes, and
 # how far past the neck's radius it opens either side at the neck
 WRAP_V = (0.17, 0.02)       # and a wrap dress's V neckline
+BLAZER_V = (0.36, 0.05)     # and a blazer's lapels
 
 
 def _open_front(region: Callable, v_shape: tuple[float, float] = OPEN_FRONT) -> Callable:
@@ -173,12 +174,22 @@ GARMENTS: dict[str, GarmentKind] = {
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
     "coat": GarmentKind(Layer.TOP, 0.025, 3, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
                         (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
+    "shirt": GarmentKind(Layer.TOP, 0.012, 2, "shell+collar", _top(lambda L: 0.93 + 0.07 * L), (0.4, 0.8),
+                         (0.005, 0.02), (0.002, 0.004), fabric="plain"),
+    # a blazer: a jacket's hip-length bodice, open over the top in a V down to its buttons
+    "blazer": GarmentKind(Layer.TOP, 0.025, 3, "shell", _open_front(_top(lambda L: 0.95), BLAZER_V), (0.3, 0.55),
+                          (0.005, 0.02), (0.003, 0.008), fabric="plain"),
     "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
                             fabric="twill"),
     "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
                               fabric="twill"),
     "jeans": GarmentKind(Layer.BOTTOM, 0.004, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
                          (0.0, 0.012), fabric="twill"),
+    "chinos": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                          fabric="twill"),
+    # joggers: jersey, ending gathered above the ankle (their taper and cuffs are not modelled)
+    "joggers": GarmentKind(Layer.BOTTOM, 0.008, 1, "shell", _bottom(lambda L: 0.9 + 0.06 * L), (0.0, 1.0),
+                           (0.005, 0.02), (0.002, 0.005), fabric="jersey"),
     "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
                          tucks_tops=True),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
@@ -366,6 +377,56 @@ def _wool(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTexturePa
                                bump_amplitude=round(float(rng.uniform(0.1, 0.3)), 3), bump_scale=60.0)
 
 
+CHINO = ([62, 3, 20], [72, 1, 10], [25, 2, -18], [42, -5, 18], [18, 0, 0], [48, 8, 24], [55, 0, -2])
+
+
+def _chino(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """Chinos: plain cotton twill in khaki, stone, navy, olive, black, tan or grey."""
+    base = CHINO[int(rng.integers(len(CHINO)))]
+    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
+                               bump_amplitude=round(float(rng.uniform(0.05, 0.15)), 3), bump_scale=60.0)
+
+
+SHIRTING = ([95, 0, 2], [86, -2, -10], [88, 6, 3], [80, 0, -1], [28, 2, -18], [74, -4, -18], [15, 0, 0])
+
+
+def _shirting(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """A shirt: shirting (white, pale blue, pale pink, light grey, navy, sky blue, black), plain,
+    in fine stripes or in gingham checks of a darker shade."""
+    base = [float(x) for x in SHIRTING[int(rng.integers(len(SHIRTING)))]]
+    pattern = str(rng.choice(["none", "stripes", "checks"], p=[0.5, 0.25, 0.25]))
+    ink = [max(base[0] - 35.0, 10.0), base[1], base[2] - 15.0 * (base[0] > 60)]
+    return dataclasses.replace(t, base_lab=base, pattern=pattern, decal="none", pattern_lab=ink,
+                               pattern_width=0.08 if pattern == "stripes" else 0.5,
+                               pattern_scale=round(float(rng.uniform(48, 64)), 3), pattern_alpha=0.7,
+                               uv_rotation_deg=90.0, bump="none")  # the stripes run down the body
+
+
+HEATHER = ([58, 0, -1], [36, 0, -2], [15, 0, 0], [24, 2, -16], [40, -4, 14], [70, 0, 0], [30, 12, 2])
+
+
+def _heather(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """Joggers: heathered fleece jersey (grey, charcoal, black, navy, olive, light grey, maroon),
+    mottled, no print."""
+    base = HEATHER[int(rng.integers(len(HEATHER)))]
+    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
+                               bump_amplitude=round(float(rng.uniform(0.2, 0.4)), 3), bump_scale=90.0)
+
+
+SUITING = ([22, 1, -14], [30, 0, -2], [14, 0, 0], [50, 0, -2], [66, 3, 14], [32, 6, 12], [40, -3, 6])
+
+
+def _suiting(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """A blazer: suiting (navy, charcoal, black, grey, beige, brown, olive), plain or, one in
+    five, a fine pinstripe a little lighter than the cloth."""
+    base = [float(x) for x in SUITING[int(rng.integers(len(SUITING)))]]
+    pin = rng.random() < 0.2
+    return dataclasses.replace(t, base_lab=base, pattern="stripes" if pin else "none", decal="none",
+                               pattern_lab=[min(base[0] + 25.0, 95.0), base[1], base[2]], pattern_width=0.06,
+                               pattern_scale=round(float(rng.uniform(24, 40)), 3), pattern_alpha=0.6,
+                               uv_rotation_deg=0.0, bump="noise", bump_amplitude=0.1, bump_scale=60.0)
+
+
 @dataclass(frozen=True)
 class Style:
     """A garment kind a sampled garment of another kind may be made as instead (``GARMENT_STYLES``):
@@ -381,9 +442,10 @@ class Style:
 # garment kind (GARMENTS) and a line here.
 GARMENT_STYLES: dict[str, tuple[Style, ...]] = {
     "tshirt": (Style("tank", 0.25),),
-    "longsleeve": (Style("sweater", 0.3, _knitted),),
-    "trousers": (Style("jeans", 0.45, _denim),),
-    "jacket": (Style("coat", 0.35, _wool, worn_with=lambda outfit: "trousers" in outfit),),  # its skirt over trousers only
+    "longsleeve": (Style("sweater", 0.3, _knitted), Style("shirt", 0.25, _shirting)),
+    "trousers": (Style("jeans", 0.4, _denim), Style("chinos", 0.2, _chino), Style("joggers", 0.15, _heather)),
+    "jacket": (Style("coat", 0.3, _wool, worn_with=lambda outfit: "trousers" in outfit),  # its skirt over trousers only
+               Style("blazer", 0.3, _suiting)),
     "dress": (Style("shift", 0.25), Style("wrap", 0.25), Style("jumpsuit", 0.15)),
 }
 _STYLE_OF = {st.kind: st for styles in GARMENT_STYLES.values() for st in styles}
@@ -396,7 +458,7 @@ def sample_style(g: GarmentParams, outfit, draw: bool = True) -> GarmentParams:
     rng = np.random.default_rng([g.texture.seed, 13])
     styles = [st for st in GARMENT_STYLES.get(g.kind, ()) if st.worn_with(list(outfit))] if draw else []
     if styles:
-        p = np.array([1.0 - sum(st.share for st in GARMENT_STYLES[g.kind])] + [st.share for st in styles])
+        p = np.array([1.0 - sum(st.share for st in styles)] + [st.share for st in styles])  # shares of those worn
         pick = int(rng.choice(len(p), p=p / p.sum()))
         if pick:  # a kind with its own cut (a shift's straight skirt) drops a drawn one
             kind = styles[pick - 1].kind
@@ -541,6 +603,51 @@ def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
 
 
+COLLAR_STAND = 0.025  # metres a shirt collar's band rises round the neck
+COLLAR_FALL = 0.038   # and its fall turns down over it, out to the points
+COLLAR_GAP = 0.45     # radians either side of straight ahead the collar is open (its points spread)
+
+
+def _neck_edge(r: BodyRegions, v: np.ndarray, f: np.ndarray, ang: np.ndarray):
+    """The radius from the neck's axis and the height of a shell's neckline at angles ``ang``
+    (from straight ahead, towards +x), interpolated round its open edge near the neck."""
+    ends = np.unique(open_edges(f, weld(v)))
+    p = v[ends]
+    dx, dz = p[:, 0] - r.neck_xz[0], p[:, 2] - r.neck_xz[1]
+    rho = np.hypot(dx, dz)
+    near = (rho < r.neck_radius + 0.08) & (p[:, 1] > r.neck_y - 0.08)
+    a = np.arctan2(dx[near], dz[near]) % (2 * np.pi)
+    order = np.argsort(a)
+    a, rho, y = a[order], rho[near][order], p[near, 1][order]
+    wrap = np.concatenate([a - 2 * np.pi, a, a + 2 * np.pi])
+    return np.interp(ang, wrap, np.tile(rho, 3)), np.interp(ang, wrap, np.tile(y, 3))
+
+
+def _collar(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40):
+    """A shirt collar on the shell ``v, f``: a stand rising ``COLLAR_STAND`` from the shell's
+    neckline, turned over at its top into a fall ``COLLAR_FALL`` long lying outside it, open
+    at the front where its points spread (and reach 12 mm lower)."""
+    ang = np.linspace(COLLAR_GAP, 2 * np.pi - COLLAR_GAP, n_seg)
+    d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
+    front = np.clip(np.cos(ang), 0.0, 1.0)
+    r0, base = _neck_edge(r, v, f, ang)
+    # (radius, height over the neckline) of each ring: the base, the stand's top, the fold, the fall's edge
+    rings = ((0.0, 0.0), (0.002, COLLAR_STAND), (0.008, COLLAR_STAND + 0.004), (0.03, COLLAR_STAND - COLLAR_FALL))
+    v = np.concatenate([np.column_stack([r.neck_xz[0] + (r0 + rad) * d[:, 0], base + h - (front * 0.012 if k == 3 else 0.0),
+                                         r.neck_xz[1] + (r0 + rad) * d[:, 1]]) for k, (rad, h) in enumerate(rings)])
+    faces = [[k * n_seg + j, (k + 1) * n_seg + j, k * n_seg + j + 1] for k in range(3) for j in range(n_seg - 1)]
+    faces += [[k * n_seg + j + 1, (k + 1) * n_seg + j, (k + 1) * n_seg + j + 1] for k in range(3) for j in range(n_seg - 1)]
+    uv = np.column_stack([np.tile(0.5 * ang / np.pi, 4), np.repeat([0.0, 0.03, 0.035, 0.075], n_seg)])
+    return v, np.array(faces), uv
+
+
+def _collared_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+    """A shirt: a shell to the neckline and a collar round it."""
+    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
+    cv, cf, cuv = _collar(r, v, f)
+    return np.concatenate([v, cv]), np.concatenate([f, cf + len(v)]), np.concatenate([uv, cuv])
+
+
 SHOE_EDGE = 0.003  # metres: the upper's thickness, turned in along its top line
 
 
@@ -617,6 +724,7 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y),
                           weights=lambda *a: both_legs_weights(*a)),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a)),
+    "shell+collar": GarmentShape(_collared_shape),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
     "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_rigid_feet, sole=True),
     "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_heeled_feet, sole=True),  # the toes bend at the ball

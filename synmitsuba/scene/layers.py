@@ -5,8 +5,8 @@ from enum import IntEnum
 class Layer(IntEnum):
     BACKGROUND = 0
     BODY = 1        # skin
-    TOP = 2         # t-shirt, long sleeve, jacket, coat
-    BOTTOM = 3      # shorts, trousers, skirt
+    TOP = 2         # t-shirt, tank, long sleeve, shirt, sweater, jacket, blazer, coat
+    BOTTOM = 3      # shorts, trousers, jeans, chinos, joggers, skirt
     DRESS = 4
     SHOES = 5
     HAIR = 6
