@@ -12,7 +12,7 @@ import numpy as np
 OUTFITS = (("tank", "jeans", "sneakers"), ("sweater", "trousers", "boots"), ("tshirt", "jeans", "coat", "dress_shoes"),
            ("shift", "heels"), ("wrap", "sandals"), ("jumpsuit", "sneakers"), ("tshirt", "skirt", "heels"),
            ("shirt", "chinos", "blazer", "dress_shoes"), ("tshirt", "joggers", "sneakers"),
-           ("shirt", "jeans", "boots"))
+           ("shirt", "jeans", "boots"), ("hoodie", "joggers", "sneakers"))
 
 
 def main() -> int:

@@ -1348,6 +1348,32 @@ def test_a_shirt_has_a_collar_standing_round_the_neck_and_open_at_the_front():
     assert behind(shirt) > behind(tee["tshirt"].rest) + 0.025
 
 
+def test_a_hoodie_has_a_hood_lying_down_the_back_outside_its_own_body():
+    """Measured against a long sleeve on the same body: behind the neck (more than 150 degrees
+    from straight ahead round its axis), 10 to 20 cm under the neck's base, the hoodie reaches
+    1 cm or more farther from the body (the hood lies over its own back); it rises 2 cm or more
+    higher there (the hood rolls up round the neck); nothing above the neck's base is inside
+    the body or within 25 degrees of straight ahead (the hood is open at the front)."""
+    h, parts = _dressed(["hoodie", "jeans"])
+    _, plain = _dressed(["longsleeve", "jeans"])
+    r = h.regions
+    nx, nz = r.neck_xz
+
+    def behind(v):
+        return v[np.abs(np.degrees(np.arctan2(v[:, 0] - nx, v[:, 2] - nz))) > 150]
+    hood, shell = behind(parts["hoodie"].rest), behind(plain["longsleeve"].rest)
+
+    def reach(v):
+        band = v[(v[:, 1] < r.neck_y - 0.1) & (v[:, 1] > r.neck_y - 0.2)]
+        return signed_distance(h.body.vertices, h.body.faces, band).max()
+    assert reach(hood) > reach(shell) + 0.01
+    assert hood[:, 1].max() > shell[:, 1].max() + 0.02
+    v = parts["hoodie"].rest
+    up = v[:, 1] > r.neck_y
+    assert signed_distance(h.body.vertices, h.body.faces, v[up]).min() > 0
+    assert not (up & (np.abs(np.degrees(np.arctan2(v[:, 0] - nx, v[:, 2] - nz))) < 25)).any()
+
+
 def test_a_shift_is_straight_and_sleeveless_a_wrap_opens_in_a_v_and_a_jumpsuit_is_one_piece():
     """A shift: no vertex nearest an arm past the shoulder (arm_s > 0.3), its skirt's radius at
     the hem within 6 cm of its radius at the hips (an A-line of the same length flares more); a
@@ -1404,6 +1430,7 @@ def test_drawn_outfits_come_in_styles_and_named_ones_as_named():
     import dataclasses
     from synmitsuba.body.garments import CHINO, DENIM, GARMENT_STYLES, HEATHER, SHIRTING, SUITING, WOOL, sample_style
     palettes = {"jeans": DENIM, "coat": WOOL, "chinos": CHINO, "joggers": HEATHER, "blazer": SUITING, "shirt": SHIRTING}
+    hoodies = []
     counts: dict = {}
     for i in range(300):
         r = sm.sample_subject(np.random.default_rng(i))
@@ -1416,6 +1443,8 @@ def test_drawn_outfits_come_in_styles_and_named_ones_as_named():
                 assert {"jeans", "trousers", "chinos", "joggers"} & set(kinds)
             if g.kind == "sweater":
                 assert g.texture.bump == "knit"
+            if g.kind == "hoodie":
+                hoodies.append(list(g.texture.base_lab) in [list(map(float, c)) for c in HEATHER])
     for base, styles in GARMENT_STYLES.items():
         for st in styles:
             total = counts.get(base, 0) + sum(counts.get(x.kind, 0) for x in styles)
@@ -1423,6 +1452,7 @@ def test_drawn_outfits_come_in_styles_and_named_ones_as_named():
                 sigma = np.sqrt(st.share * (1 - st.share) / total)  # a binomial share's spread
                 assert abs(counts.get(st.kind, 0) / total - st.share) < 3 * sigma + 0.02, (st.kind, counts)
             assert counts.get(st.kind, 0) > 0
+    assert 0.3 < np.mean(hoodies) < 0.9  # heathered fleece, or the garment's own colour
     g = sm.sample_subject(np.random.default_rng(0)).garments[0]
     for kind in ("tshirt", "longsleeve", "trousers"):
         styled = [sample_style(dataclasses.replace(g, kind=kind, texture=dataclasses.replace(g.texture, seed=s)),

@@ -174,6 +174,8 @@ GARMENTS: dict[str, GarmentKind] = {
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
     "coat": GarmentKind(Layer.TOP, 0.025, 3, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
                         (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
+    "hoodie": GarmentKind(Layer.TOP, 0.016, 2, "shell+hood", _top(lambda L: 0.95 + 0.05 * L), (0.45, 0.8),
+                          (0.01, 0.03), (0.003, 0.006), fabric="jersey"),
     "shirt": GarmentKind(Layer.TOP, 0.012, 2, "shell+collar", _top(lambda L: 0.93 + 0.07 * L), (0.4, 0.8),
                          (0.005, 0.02), (0.002, 0.004), fabric="plain"),
     # a blazer: a jacket's hip-length bodice, open over the top in a V down to its buttons
@@ -413,6 +415,14 @@ def _heather(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextur
                                bump_amplitude=round(float(rng.uniform(0.2, 0.4)), 3), bump_scale=90.0)
 
 
+def _fleece(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
+    """A hoodie: heathered fleece (``HEATHER``'s colours) or its own colour, plain or with a
+    print on the chest, no pattern."""
+    base = [float(x) for x in HEATHER[int(rng.integers(len(HEATHER)))]] if rng.random() < 0.6 else t.base_lab
+    return dataclasses.replace(t, base_lab=base, pattern="none", bump="noise",
+                               bump_amplitude=round(float(rng.uniform(0.2, 0.4)), 3), bump_scale=90.0)
+
+
 SUITING = ([22, 1, -14], [30, 0, -2], [14, 0, 0], [50, 0, -2], [66, 3, 14], [32, 6, 12], [40, -3, 6])
 
 
@@ -442,7 +452,7 @@ class Style:
 # garment kind (GARMENTS) and a line here.
 GARMENT_STYLES: dict[str, tuple[Style, ...]] = {
     "tshirt": (Style("tank", 0.25),),
-    "longsleeve": (Style("sweater", 0.3, _knitted), Style("shirt", 0.25, _shirting)),
+    "longsleeve": (Style("sweater", 0.25, _knitted), Style("shirt", 0.25, _shirting), Style("hoodie", 0.2, _fleece)),
     "trousers": (Style("jeans", 0.4, _denim), Style("chinos", 0.2, _chino), Style("joggers", 0.15, _heather)),
     "jacket": (Style("coat", 0.3, _wool, worn_with=lambda outfit: "trousers" in outfit),  # its skirt over trousers only
                Style("blazer", 0.3, _suiting)),
@@ -628,17 +638,59 @@ def _collar(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40):
     neckline, turned over at its top into a fall ``COLLAR_FALL`` long lying outside it, open
     at the front where its points spread (and reach 12 mm lower)."""
     ang = np.linspace(COLLAR_GAP, 2 * np.pi - COLLAR_GAP, n_seg)
-    d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
     front = np.clip(np.cos(ang), 0.0, 1.0)
     r0, base = _neck_edge(r, v, f, ang)
-    # (radius, height over the neckline) of each ring: the base, the stand's top, the fold, the fall's edge
-    rings = ((0.0, 0.0), (0.002, COLLAR_STAND), (0.008, COLLAR_STAND + 0.004), (0.03, COLLAR_STAND - COLLAR_FALL))
-    v = np.concatenate([np.column_stack([r.neck_xz[0] + (r0 + rad) * d[:, 0], base + h - (front * 0.012 if k == 3 else 0.0),
-                                         r.neck_xz[1] + (r0 + rad) * d[:, 1]]) for k, (rad, h) in enumerate(rings)])
-    faces = [[k * n_seg + j, (k + 1) * n_seg + j, k * n_seg + j + 1] for k in range(3) for j in range(n_seg - 1)]
-    faces += [[k * n_seg + j + 1, (k + 1) * n_seg + j, (k + 1) * n_seg + j + 1] for k in range(3) for j in range(n_seg - 1)]
-    uv = np.column_stack([np.tile(0.5 * ang / np.pi, 4), np.repeat([0.0, 0.03, 0.035, 0.075], n_seg)])
-    return v, np.array(faces), uv
+    # (radius, height) over the neckline of each ring: the base, the stand's top, the fold, the fall's edge
+    rings = [(0.0, 0.0), (0.002, COLLAR_STAND), (0.008, COLLAR_STAND + 0.004),
+             (0.03, COLLAR_STAND - COLLAR_FALL - 0.012 * front)]
+    return _strip(r, ang, [(r0 + rad, base + h) for rad, h in rings])
+
+
+def _strip(r: BodyRegions, ang: np.ndarray, rings: list):
+    """A band round the neck's axis through ``rings`` of (radius, height) at angles ``ang``:
+    open at its two ends, uv from the angle and the length along it."""
+    n = len(ang)
+    d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
+    v = np.concatenate([np.column_stack([r.neck_xz[0] + np.broadcast_to(rad, n) * d[:, 0], np.broadcast_to(h, n),
+                                         r.neck_xz[1] + np.broadcast_to(rad, n) * d[:, 1]]) for rad, h in rings])
+    k, j = np.meshgrid(np.arange(len(rings) - 1), np.arange(n - 1), indexing="ij")
+    a, b = (k * n + j).ravel(), (k * n + j + 1).ravel()
+    faces = np.concatenate([np.stack([a, a + n, b], 1), np.stack([b, a + n, b + n], 1)])
+    step = np.linalg.norm(np.diff(v.reshape(len(rings), n, 3), axis=0), axis=2).mean(1)
+    uv = np.column_stack([np.tile(0.5 * ang / np.pi, len(rings)), np.repeat(np.concatenate([[0.0], np.cumsum(step)]), n)])
+    return v, faces, uv
+
+
+HOOD_GAP = 0.6      # radians either side of straight ahead a hood's edges leave open at the neck
+HOOD_DEPTH = 0.24   # metres a hood lying down reaches down the back, under the neckline at the back
+HOOD_LOFT = 0.012   # metres it lies out from the garment under it
+
+
+def _hood(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40, n_down: int = 6):
+    """A hood lying down: it rises from the shell's neckline round the back of the neck, turns
+    over and lies down the back (``HOOD_DEPTH`` at the middle, less towards the front), each
+    point ``HOOD_LOFT`` out from the shell under it."""
+    ang = np.linspace(HOOD_GAP, 2 * np.pi - HOOD_GAP, n_seg)
+    r0, base = _neck_edge(r, v, f, ang)
+    back = np.clip(-np.cos(ang), 0.0, 1.0)
+    depth = HOOD_DEPTH * (0.08 + 0.92 * back ** 1.5)
+    rise = 0.5 + 0.5 * back  # the hood rolls thinner towards its front edges
+    rho_v = np.hypot(v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1])
+    ang_v = np.arctan2(v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1]) % (2 * np.pi)
+    rings = [(r0, base), (r0 + 0.01 * rise, base + 0.03 * rise), (r0 + 0.025 * rise, base + 0.04 * rise)]
+    for s in np.linspace(0.0, 1.0, n_down + 1)[1:]:
+        y = base + 0.04 * rise - (depth + 0.04 * rise) * s
+        reach = np.array([rho_v[(np.abs(v[:, 1] - yk) < 0.02) & (np.abs((ang_v - a + np.pi) % (2 * np.pi) - np.pi) < 0.12)]
+                          .max(initial=rk) for a, yk, rk in zip(ang, y, r0)])
+        rings.append((np.maximum(reach + HOOD_LOFT, r0 + 0.025 * rise), y))
+    return _strip(r, ang, rings)
+
+
+def _hooded_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+    """A hoodie: a shell to the neckline and a hood lying down its back."""
+    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
+    hv, hf, huv = _hood(r, v, f)
+    return np.concatenate([v, hv]), np.concatenate([f, hf + len(v)]), np.concatenate([uv, huv])
 
 
 def _collared_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
@@ -725,6 +777,7 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
                           weights=lambda *a: both_legs_weights(*a)),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a)),
     "shell+collar": GarmentShape(_collared_shape),
+    "shell+hood": GarmentShape(_hooded_shape),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
     "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_rigid_feet, sole=True),
     "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_heeled_feet, sole=True),  # the toes bend at the ball

@@ -5,7 +5,7 @@ from enum import IntEnum
 class Layer(IntEnum):
     BACKGROUND = 0
     BODY = 1        # skin
-    TOP = 2         # t-shirt, tank, long sleeve, shirt, sweater, jacket, blazer, coat
+    TOP = 2         # t-shirt, tank, long sleeve, shirt, hoodie, sweater, jacket, blazer, coat
     BOTTOM = 3      # shorts, trousers, jeans, chinos, joggers, skirt
     DRESS = 4
     SHOES = 5
