@@ -1290,6 +1290,12 @@ def test_a_tank_top_leaves_the_arms_bare_but_for_a_strap_over_each_shoulder():
         assert mid[:, 1].max() < r.neck_y - 0.08
 
 
+def _front_centre(r, v: np.ndarray, y: float) -> np.ndarray:
+    """Vertices of ``v`` within 2 cm of the body's centre line in front, 1.5 cm either side of ``y``."""
+    nx, nz = r.neck_xz
+    return v[(np.abs(v[:, 1] - y) < 0.015) & (v[:, 2] > nz) & (np.abs(v[:, 0] - nx) < 0.02)]
+
+
 def test_a_coat_opens_in_a_v_over_the_top_and_hangs_to_the_knees():
     """The coat's front: nothing within 2 cm of the centre line at mid-chest (the V shows the top
     under it, which is there), closed again 35 cm under the neck; its hem 30 cm or more under
@@ -1297,11 +1303,8 @@ def test_a_coat_opens_in_a_v_over_the_top_and_hangs_to_the_knees():
     body (the layers nest)."""
     h, parts = _dressed(["tshirt", "trousers", "coat"])
     r, coat, shirt = h.regions, parts["coat"].rest, parts["tshirt"].rest
-    nx, nz = r.neck_xz
-    def front_centre(v, y):
-        return v[(np.abs(v[:, 1] - y) < 0.015) & (v[:, 2] > nz) & (np.abs(v[:, 0] - nx) < 0.02)]
-    assert len(front_centre(coat, r.neck_y - 0.12)) == 0 and len(front_centre(shirt, r.neck_y - 0.12)) > 0
-    assert len(front_centre(coat, r.neck_y - 0.35)) > 0
+    assert len(_front_centre(r, coat, r.neck_y - 0.12)) == 0 and len(_front_centre(r, shirt, r.neck_y - 0.12)) > 0
+    assert len(_front_centre(r, coat, r.neck_y - 0.35)) > 0
     assert coat[:, 1].min() < r.hip_y - 0.3
     d = {k: signed_distance(h.body.vertices, h.body.faces, parts[k].rest) for k in ("tshirt", "trousers", "coat")}
     assert np.median(d["coat"]) > np.median(d["tshirt"]) and np.median(d["coat"]) > np.median(d["trousers"])
@@ -1314,11 +1317,8 @@ def test_a_blazer_opens_in_a_v_to_its_buttons_and_ends_at_the_hips_and_joggers_a
     joint, where trousers on the same body reach past it."""
     h, parts = _dressed(["longsleeve", "joggers", "blazer"])
     r, blazer, shirt = h.regions, parts["blazer"].rest, parts["longsleeve"].rest
-    nx, nz = r.neck_xz
-    def front_centre(v, y):
-        return v[(np.abs(v[:, 1] - y) < 0.015) & (v[:, 2] > nz) & (np.abs(v[:, 0] - nx) < 0.02)]
-    assert len(front_centre(blazer, r.neck_y - 0.24)) == 0 and len(front_centre(shirt, r.neck_y - 0.24)) > 0
-    assert len(front_centre(blazer, r.neck_y - 0.42)) > 0
+    assert len(_front_centre(r, blazer, r.neck_y - 0.24)) == 0 and len(_front_centre(r, shirt, r.neck_y - 0.24)) > 0
+    assert len(_front_centre(r, blazer, r.neck_y - 0.42)) > 0
     assert r.crotch_y - 0.15 < blazer[:, 1].min() < r.waist_y
     d = {k: signed_distance(h.body.vertices, h.body.faces, parts[k].rest) for k in ("longsleeve", "blazer")}
     assert np.median(d["blazer"]) > np.median(d["longsleeve"])
