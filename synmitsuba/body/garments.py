@@ -352,14 +352,21 @@ def sample_skirt_cut(g: GarmentParams) -> GarmentParams:
     return dataclasses.replace(g, cut=names[int(rng.choice(len(names), p=share / share.sum()))])
 
 
+def _plain_cloth(t: GarmentTextureParams, rng: np.random.Generator, palette, amplitude: tuple[float, float],
+                 scale: float) -> GarmentTextureParams:
+    """``t`` in a colour drawn from ``palette``, no pattern or print, a mottled ``noise`` bump
+    (amplitude drawn from ``amplitude``, at ``scale``): denim, wool, chinos, heathered jersey."""
+    base = palette[int(rng.integers(len(palette)))]
+    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
+                               bump_amplitude=round(float(rng.uniform(*amplitude)), 3), bump_scale=scale)
+
+
 DENIM = ([26, 3, -24], [34, 2, -27], [45, 0, -25], [58, -2, -20], [70, -3, -14], [20, 0, -4], [14, 0, 0])
 
 
 def _denim(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
     """Jeans: indigo denim from dark rinse to light wash (or black), plain, a faint mottled wash."""
-    base = DENIM[int(rng.integers(len(DENIM)))]
-    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
-                               bump_amplitude=round(float(rng.uniform(0.15, 0.35)), 3), bump_scale=40.0)
+    return _plain_cloth(t, rng, DENIM, (0.15, 0.35), 40.0)
 
 
 def _knitted(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
@@ -374,9 +381,7 @@ WOOL = ([60, 8, 28], [15, 0, 0], [30, 0, -2], [22, 3, -20], [50, 0, -2], [40, -6
 def _wool(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
     """A coat: plain wool in a coat's colours (camel, black, charcoal, navy, grey, olive,
     burgundy, beige), no print."""
-    base = WOOL[int(rng.integers(len(WOOL)))]
-    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
-                               bump_amplitude=round(float(rng.uniform(0.1, 0.3)), 3), bump_scale=60.0)
+    return _plain_cloth(t, rng, WOOL, (0.1, 0.3), 60.0)
 
 
 CHINO = ([62, 3, 20], [72, 1, 10], [25, 2, -18], [42, -5, 18], [18, 0, 0], [48, 8, 24], [55, 0, -2])
@@ -384,9 +389,7 @@ CHINO = ([62, 3, 20], [72, 1, 10], [25, 2, -18], [42, -5, 18], [18, 0, 0], [48, 
 
 def _chino(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
     """Chinos: plain cotton twill in khaki, stone, navy, olive, black, tan or grey."""
-    base = CHINO[int(rng.integers(len(CHINO)))]
-    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
-                               bump_amplitude=round(float(rng.uniform(0.05, 0.15)), 3), bump_scale=60.0)
+    return _plain_cloth(t, rng, CHINO, (0.05, 0.15), 60.0)
 
 
 SHIRTING = ([95, 0, 2], [86, -2, -10], [88, 6, 3], [80, 0, -1], [28, 2, -18], [74, -4, -18], [15, 0, 0])
@@ -410,9 +413,7 @@ HEATHER = ([58, 0, -1], [36, 0, -2], [15, 0, 0], [24, 2, -16], [40, -4, 14], [70
 def _heather(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
     """Joggers: heathered fleece jersey (grey, charcoal, black, navy, olive, light grey, maroon),
     mottled, no print."""
-    base = HEATHER[int(rng.integers(len(HEATHER)))]
-    return dataclasses.replace(t, base_lab=[float(x) for x in base], pattern="none", decal="none", bump="noise",
-                               bump_amplitude=round(float(rng.uniform(0.2, 0.4)), 3), bump_scale=90.0)
+    return _plain_cloth(t, rng, HEATHER, (0.2, 0.4), 90.0)
 
 
 def _fleece(t: GarmentTextureParams, rng: np.random.Generator) -> GarmentTextureParams:
@@ -686,18 +687,14 @@ def _hood(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40, n_down:
     return _strip(r, ang, rings)
 
 
-def _hooded_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
-    """A hoodie: a shell to the neckline and a hood lying down its back."""
-    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
-    hv, hf, huv = _hood(r, v, f)
-    return np.concatenate([v, hv]), np.concatenate([f, hf + len(v)]), np.concatenate([uv, huv])
-
-
-def _collared_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
-    """A shirt: a shell to the neckline and a collar round it."""
-    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
-    cv, cf, cuv = _collar(r, v, f)
-    return np.concatenate([v, cv]), np.concatenate([f, cf + len(v)]), np.concatenate([uv, cuv])
+def _shell_and(neck_part: Callable) -> Callable:
+    """A shape: the shell to the neckline and ``neck_part(regions, v, f)`` built on it (a
+    shirt's collar, a hoodie's hood)."""
+    def shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+        v, f, uv = _shell_shape(body, r, split, g, cut, offset)
+        pv, pf, puv = neck_part(r, v, f)
+        return np.concatenate([v, pv]), np.concatenate([f, pf + len(v)]), np.concatenate([uv, puv])
+    return shape
 
 
 SHOE_EDGE = 0.003  # metres: the upper's thickness, turned in along its top line
@@ -776,8 +773,8 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y),
                           weights=lambda *a: both_legs_weights(*a)),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a)),
-    "shell+collar": GarmentShape(_collared_shape),
-    "shell+hood": GarmentShape(_hooded_shape),
+    "shell+collar": GarmentShape(_shell_and(_collar)),
+    "shell+hood": GarmentShape(_shell_and(_hood)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
     "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_rigid_feet, sole=True),
     "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_heeled_feet, sole=True),  # the toes bend at the ball
