@@ -365,10 +365,7 @@ def test_pose_between_frames_is_the_slerp_of_its_neighbours():
 def test_retargeted_feet_pitch_as_the_source_feet_do_from_their_flat_rests(kind):
     """Both rest poses stand flat-footed: anny's ankle-to-middle-toe line is as far from its rest
     slope at every frame as the humanoid source's ankle-to-toe line is from its own (their rest
-    slopes may differ, as 19 against the humanoid's old 26.6 degrees did, which the T-pose must not turn
-    into a toe-down tilt).
-    Within half a degree: anny's toes point a little outwards, so pitching its foot by 30 degrees
-    (a run's toe-off) moves its line's slope 0.2 degrees less than the source's."""
+    slopes differ, 19 against 26.6 degrees, which the T-pose must not turn into a toe-down tilt)."""
     from synmitsuba.body.anny_model import anny_body
     src = sm.procedural_motion(kind, np.random.default_rng(2), seconds=1.0)
     anny = anny_body().skeleton
@@ -384,37 +381,4 @@ def test_retargeted_feet_pitch_as_the_source_feet_do_from_their_flat_rests(kind)
     for s in ("l", "r"):
         side = "L" if s == "l" else "R"
         np.testing.assert_allclose(pitch(out, f"foot.{side}", f"toe3-1.{side}"),
-                                   pitch(src, f"{s}_ankle", f"{s}_toe"), atol=0.5)
-
-
-@pytest.mark.parametrize("kind", ["walk", "jog", "run"])
-def test_feet_roll_from_heel_strike_onto_the_ball_and_off_the_toes(kind):
-    """Measured from joint positions alone: the foot (ankle to ball) pitches toes up by the
-    gait's heel-strike angle and heel up by its toe-off angle (``ROLL``, within 1 degree) and
-    lies flat for a stretch of every stance; the heel's ground point (``HEEL``, carried by the
-    foot's pitch) never goes under the ground, and the foot lands on it toes up; while the heel is up
-    on a planted foot, the toes lie flat on the ground and the ball holds still."""
-    from synmitsuba.motion.procedural import HEEL, ROLL
-    m = sm.procedural_motion(kind, np.random.default_rng(4), seconds=2.0)
-    p, rest, sk = m.joint_positions(), m.skeleton.rest_positions, m.skeleton
-    strike, off = np.degrees(ROLL[kind][:2])
-    for s in "lr":
-        a, b, c = (sk.index(f"{s}_{j}") for j in ("ankle", "toe", "toe_end"))
-        slope = lambda d: np.degrees(np.arctan2(-d[..., 1], d[..., 2]))  # noqa: E731  (walking along +z)
-        pitch = slope(p[:, b] - p[:, a]) - slope(rest[b] - rest[a])
-        assert pitch.max() == pytest.approx(off, abs=1.0) and pitch.min() == pytest.approx(-strike, abs=1.0)
-        t = np.radians(pitch)
-        heel = p[:, a] + np.stack([np.zeros_like(t), np.cos(t) * HEEL[1] - np.sin(t) * HEEL[2],
-                                   np.sin(t) * HEEL[1] + np.cos(t) * HEEL[2]], 1)
-        assert heel[:, 1].min() > -1e-6
-        landed = (pitch < -1) & (heel[:, 1] < 1e-6)  # toes up on the heel after a strike
-        assert landed.sum() >= 2
-        on_heel = landed[1:] & landed[:-1]
-        assert np.abs(np.diff(heel, axis=0)[on_heel]).max(initial=0.0) < 1e-6  # the heel holds still as the foot comes down
-        rising = (pitch > 2) & (np.abs(p[:, c, 1]) < 1e-6)  # heel up, toe tip on the ground
-        assert rising.sum() >= 2
-        toes = p[:, c] - p[:, b]
-        assert np.allclose(toes[rising], rest[c] - rest[b], atol=1e-6)
-        run = rising[1:] & rising[:-1]
-        assert np.abs(np.diff(p[:, b], axis=0)[run]).max() < 1e-6
-        assert (np.abs(pitch) < 0.5).sum() >= 3
+                                   pitch(src, f"{s}_ankle", f"{s}_toe"), atol=0.05)

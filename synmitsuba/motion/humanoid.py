@@ -9,10 +9,8 @@ from synmitsuba.body.skeleton import Skeleton
 
 _LEFT = [  # name, parent, rest position (left side; the right side mirrors x)
     ("l_hip", "pelvis", (0.09, 0.92, 0.0)), ("l_knee", "l_hip", (0.09, 0.50, 0.0)),
-    # the foot in anny's proportions (its average body's, scaled to this pelvis): a rolling foot
-    # turns about its ball, and a longer or shorter foot than the body's sinks or lifts its ball
-    ("l_ankle", "l_knee", (0.09, 0.08, 0.0)), ("l_toe", "l_ankle", (0.09, 0.028, 0.152)),
-    ("l_toe_end", "l_toe", (0.09, 0.0, 0.21)),
+    ("l_ankle", "l_knee", (0.09, 0.085, 0.0)), ("l_toe", "l_ankle", (0.09, 0.02, 0.13)),
+    ("l_toe_end", "l_toe", (0.09, 0.0, 0.19)),
     ("l_collar", "chest", (0.03, 1.45, 0.0)), ("l_shoulder", "l_collar", (0.18, 1.45, 0.0)),
     ("l_elbow", "l_shoulder", (0.46, 1.45, 0.0)), ("l_wrist", "l_elbow", (0.71, 1.45, 0.0)),
     ("l_hand_end", "l_wrist", (0.80, 1.45, 0.0)),

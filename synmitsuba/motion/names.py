@@ -35,7 +35,7 @@ FAMILIES: dict[str, dict[str, str]] = {
                     "neck01": "neck", "head": "head", "clavicle{s}": "{x}_collar", "upperarm01{s}": "{x}_shoulder",
                     "lowerarm01{s}": "{x}_elbow", "wrist{s}": "{x}_wrist", "finger3-1{s}": "{x}_hand_end",
                     "upperleg01{s}": "{x}_hip", "lowerleg01{s}": "{x}_knee", "foot{s}": "{x}_ankle",
-                    "toe3-1{s}": "{x}_toe", **{f"toe{k}-1{{s}}": "{x}_toe" for k in (1, 2, 4, 5)}}),  # the toes bend as one
+                    "toe3-1{s}": "{x}_toe"}),
     "cmu": _sided({"Hips": "pelvis", "LowerBack": "spine1", "Spine": "spine2", "Spine1": "chest", "Neck": "neck",
                    "Head": "head", "Head_end": "head_end", "{S}Shoulder": "{x}_collar", "{S}Arm": "{x}_shoulder",
                    "{S}ForeArm": "{x}_elbow", "{S}Hand": "{x}_wrist", "{S}UpLeg": "{x}_hip", "{S}Leg": "{x}_knee",
@@ -87,7 +87,7 @@ def finger_pairs(source_names, target_names) -> dict[str, str]:
 def body_model_to_anny(names) -> dict[str, str]:
     """{SMPL / SMPL-X joint name: anny bone} for every joint with a counterpart: the body through
     the canonical names (as retargeting maps them), hands and eyes through their own table."""
-    inv_anny = {c: n for n, c in reversed(FAMILIES["anny"].items())}  # the first of a name's joints (toe3-1)
+    inv_anny = {c: n for n, c in FAMILIES["anny"].items()}
     out = {n: inv_anny[c] for n, c in canonical_map(names, "smplx").items() if c in inv_anny}
     out.update({n: _ANNY_EXTRA[n] for n in names if n in _ANNY_EXTRA})
     return out

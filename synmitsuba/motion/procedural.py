@@ -80,37 +80,6 @@ GAIT = {  # stance fraction, foot lift (m), pelvis drop (m), pelvis bob (m), tru
     "jog": (0.42, 0.14, 0.07, 0.03, D(8), D(75)),
     "run": (0.36, 0.22, 0.09, 0.04, D(12), D(90)),
 }
-# the foot's roll over a stride: heel-strike pitch (toes up), toe-off pitch (heel up), and the shares
-# of the stride the foot takes to come flat after the strike and to rise onto the ball before toe-off
-ROLL = {"walk": (D(15), D(30), 0.08, 0.2), "jog": (D(8), D(32), 0.06, 0.15), "run": (D(5), D(35), 0.05, 0.15)}
-HEEL = np.array([0.0, -0.08, -0.075])  # the ground point a heel strike rolls on (a shoe's back edge), from the ankle
-
-
-def _smooth(x):
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3 - 2 * x)
-
-
-def foot_pitch(u, beta: float, roll: tuple) -> np.ndarray:
-    """The foot's pitch (radians, positive heel up) at stride phase ``u`` (0 at heel strike,
-    ``beta`` at toe-off): down from the strike's toes-up onto the heel, flat, up onto the ball,
-    then back through flat in early swing and toes up again for the next strike."""
-    strike, off, load, rise = roll
-    swing = (u - beta) / (1 - beta)
-    return np.where(u < load, -strike * (1 - _smooth(u / load)),
-                    np.where(u < beta, off * _smooth((u - beta + rise) / rise),
-                             off * (1 - _smooth(swing / 0.4)) - strike * _smooth((swing - 0.6) / 0.4)))
-
-
-def _rolled(flat_ankle: np.ndarray, pitch: np.ndarray, toe: np.ndarray) -> np.ndarray:
-    """Where the ankle goes when the foot, flat with its ankle at ``flat_ankle``, pitches by
-    ``pitch`` about its ball (the toe joint, ``toe`` from the ankle) when heel up, about its
-    heel's ground point when toes up: the point it pivots on stays where the flat foot had it."""
-    pivot = np.where(pitch[:, None] > 0, toe, HEEL)
-    c, s = np.cos(pitch), np.sin(pitch)
-    back = -pivot  # ankle from the pivot, in the flat foot
-    turned = np.stack([back[:, 0], c * back[:, 1] - s * back[:, 2], s * back[:, 1] + c * back[:, 2]], 1)
-    return flat_ankle + pivot + turned
 
 
 def _foot_track(t, f: float, offset: float, beta: float, step, lift: float):
@@ -126,10 +95,9 @@ def _foot_track(t, f: float, offset: float, beta: float, step, lift: float):
     return along, height
 
 
-def _leg_ik(p: _Pose, side: str, hip, ankle, pitch=None) -> None:
+def _leg_ik(p: _Pose, side: str, hip, ankle) -> None:
     """Two-bone IK: rotate hip and knee so the ankle reaches ``ankle`` (F, 3) from ``hip``;
-    the foot pitches by ``pitch`` (None: stays flat, global rotation identity), its toes
-    staying flat on the ground while its heel is up. Assumes the pelvis is not rotated."""
+    the foot stays flat (global rotation identity). Assumes the pelvis is not rotated."""
     sk = p.skel
     s = side[0]
     ih, ik, ia = sk.index(f"{s}_hip"), sk.index(f"{s}_knee"), sk.index(f"{s}_ankle")
@@ -145,9 +113,6 @@ def _leg_ik(p: _Pose, side: str, hip, ankle, pitch=None) -> None:
     p.R[:, ih] = axis_rotation("z", phi) @ axis_rotation("x", -(gamma + alpha))
     p.R[:, ik] = axis_rotation("x", knee)
     p.R[:, ia] = np.swapaxes(p.R[:, ih] @ p.R[:, ik], -1, -2)
-    if pitch is not None:
-        p.R[:, ia] = p.R[:, ia] @ axis_rotation("x", pitch)
-        p.R[:, sk.index(f"{s}_toe")] = axis_rotation("x", -np.maximum(pitch, 0.0))
 
 
 def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.ndarray:
@@ -162,15 +127,11 @@ def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.nda
     sk = p.skel
     pelvis = np.zeros((n, 3))
     pelvis += (speed * t)[:, None] * direction
-    ankles, hips, reach, pitches = {}, {}, [], {}
+    ankles, hips, reach = {}, {}, []
     for side, offset in (("left", 0.0), ("right", 0.5)):
         along, height = _foot_track(t, f, offset, beta, direction, lift * (0.6 if lateral else style))
         ankle = sk.rest_positions[sk.index(f"{side[0]}_ankle")] + (speed * along)[:, None] * direction
         ankle[:, 1] += height
-        if not lateral:  # heel strike, roll onto the ball, toe-off (a side step keeps its feet flat)
-            pitches[side] = foot_pitch((f * t + offset) % 1.0, beta, ROLL[kind])
-            ia = sk.index(f"{side[0]}_ankle")
-            ankle = _rolled(ankle, pitches[side], sk.rest_positions[sk.index(f"{side[0]}_toe")] - sk.rest_positions[ia])
         hip_off = sk.offsets[sk.index(f"{side[0]}_hip")]
         leg = 0.97 * (np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_knee")])
                       + np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_ankle")]))
@@ -183,7 +144,7 @@ def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.nda
     y_smooth = np.convolve(np.pad(y, 4, mode="edge"), kernel / kernel.sum(), mode="valid")
     pelvis[:, 1] = np.minimum(y, y_smooth)
     for side in ("left", "right"):
-        _leg_ik(p, side, pelvis + hips[side], ankles[side], pitches.get(side))
+        _leg_ik(p, side, pelvis + hips[side], ankles[side])
     phase = 2 * np.pi * f * t
     _arms_down(p, elbow=elbow)
     arm = a["amplitude"] * D(22) * style * (0.3 if lateral else 1.0)

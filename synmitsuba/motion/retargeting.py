@@ -52,7 +52,7 @@ def aligned_globals(sk: Skeleton, bones: dict[int, tuple[int, np.ndarray]]) -> n
 
 def bone_children(sk: Skeleton, canon: dict[str, str]) -> dict[int, int]:
     """{joint: the descendant its bone points to} through the canonical names (``BONE_CHILD``)."""
-    inv = {c: n for n, c in reversed(canon.items())}  # a canonical joint several share (anny's toes): the first
+    inv = {c: n for n, c in canon.items()}
     out = {}
     for i, name in enumerate(sk.names):
         child = BONE_CHILD.get(canon.get(name, ""))
@@ -66,7 +66,7 @@ def tpose_globals(sk: Skeleton, canon: dict[str, str]) -> np.ndarray:
 
     The feet (each ankle and everything below it) keep their rest orientation: every rest pose
     we read stands flat-footed, while bone directions differ by skeleton (anny's ankle-to-toe
-    slopes 19 degrees, the humanoid's foot 26.6 before it took anny's proportions), and aligning them would hold a target's feet
+    slopes 19 degrees, the humanoid's 26.6), and aligning them would hold a target's feet
     toe-down by the difference at every frame."""
     ref = humanoid_skeleton()
     bones = {i: (j, ref.rest_positions[ref.index(BONE_CHILD[canon[sk.names[i]]])] -
@@ -97,7 +97,7 @@ def _pairs(src: Skeleton, tgt: Skeleton, name_map: dict | None) -> dict[int, int
     if src.names == tgt.names:
         return {i: i for i in range(len(tgt))}
     cs, ct = canonical_map(src.names), canonical_map(tgt.names)
-    inv_s = {c: n for n, c in reversed(cs.items())}
+    inv_s = {c: n for n, c in cs.items()}
     pairs = {tgt.index(n): src.index(inv_s[c]) for n, c in ct.items() if c in inv_s}
     if len(pairs) < 6:
         raise ConfigError("name_map", None, "could not match the skeletons' joint names (found "
