@@ -164,7 +164,18 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
     for g in garments:
         frames[g.name] = _with_band(g, q[:, start:start + len(g.rows)][:, g.index])
         start += len(g.rows)
-    return ClothTrack(frames)
+    return ClothTrack(_outside_body(frames, collider, s))
+
+
+def _outside_body(frames: dict, collider: Collider, s: ClothSettings) -> dict:
+    """Every garment vertex, held and hem band too, out of the body at each frame by half the
+    particle radius (``outside.keep_outside``: the whole body mesh, not the nearest vertices')."""
+    from synmitsuba.cloth.outside import keep_outside
+    for f in range(collider.n_frames):
+        body = collider.at(f)[0]
+        for v in frames.values():
+            v[f] = keep_outside(body, collider.faces, v[f], s.particle_radius / 2)
+    return frames
 
 
 def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Collider]:
