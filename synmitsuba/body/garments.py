@@ -341,17 +341,18 @@ def body_regions(body) -> BodyRegions:
         arm_len.append(np.linalg.norm(axis))
         leg_len.append(hip[1] - ank[1])
     hip_y = float(sk.rest_positions[sk.index("upperleg01.L"), 1])
+    crotch_y, waist_y = hip_y - 0.07, float(sk.rest_positions[sk.index("spine03"), 1])
+    armpit_y = float(sk.rest_positions[sk.index("upperarm01.L"), 1]) - ARMPIT
     neck_y = float(sk.rest_positions[sk.index("neck01"), 1]) - 0.01
     ring = v[(group == "head") & (np.abs(v[:, 1] - neck_y - 0.03) < 0.01)][:, [0, 2]]
     centre = ring.mean(0)
     return BodyRegions(group, vertex_normals(v, body.faces), arm_s, leg_s, float(np.mean(arm_len)), float(np.mean(leg_len)),
-                       waist_y=float(sk.rest_positions[sk.index("spine03"), 1]), hip_y=hip_y, crotch_y=hip_y - 0.07,
+                       waist_y=waist_y, hip_y=hip_y, crotch_y=crotch_y,
                        neck_y=neck_y, neck_xz=(float(centre[0]), float(centre[1])),
                        neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)),
                        shoulder=(float(np.mean([abs(sk.rest_positions[sk.index(f"upperarm01.{s}"), 0] - centre[0])
                                                 for s in "LR"])), float(sk.rest_positions[sk.index("upperarm01.L"), 1])),
-                       girths=measure_girths(v, group, hip_y - 0.07, float(sk.rest_positions[sk.index("spine03"), 1]),
-                                             float(sk.rest_positions[sk.index("upperarm01.L"), 1]) - ARMPIT))
+                       girths=measure_girths(v, group, crotch_y, waist_y, armpit_y))
 
 
 def sample_skirt_cut(g: GarmentParams) -> GarmentParams:
@@ -825,8 +826,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     kind = GARMENTS[g.kind]
     fit = garment_fit(kind.layer, g.grade, r.girths) if g.grade is not None and r.girths and not kind.footwear else None
     offset = garment_offset(g, below, fit)
-    grade = g.grade if fit is not None and g.grade is not None else 0
-    cut_for = dataclasses.replace(g, length=float(np.clip(g.length + GRADE_LENGTH * grade, 0, 1))) if grade else g
+    cut_for = _cut_longer(g, g.grade or 0) if fit is not None else g  # (fit: g is graded)
     shape = cut_for
     if tuck and kind.layer == Layer.TOP:
         shape = dataclasses.replace(cut_for, length=min(cut_for.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
@@ -839,6 +839,11 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
         v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds))
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices), fit)
+
+
+def _cut_longer(g: GarmentParams, grade: int) -> GarmentParams:
+    """``g`` as cut ``grade`` sizes up: ``GRADE_LENGTH`` of its kind's length range longer a size."""
+    return dataclasses.replace(g, length=float(np.clip(g.length + GRADE_LENGTH * grade, 0, 1))) if grade else g
 
 
 def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
