@@ -502,14 +502,17 @@ def _folds(cut: SkirtCut, ang: np.ndarray, t: float) -> np.ndarray:
     return 0.5 * cut.depth * t * wave
 
 
-def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float):
+def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, density: int = 1):
     """A skirt surface from top_y down, widening outwards by its cut (``SKIRT_CUTS``), outside
-    every body vertex it passes."""
+    every body vertex it passes; ``density`` times the rings down and the points round (a
+    simulated skirt's folds need them), but not for sharp pleats: finer, their creases were
+    softer and a walk opened them (down to 40 % of their depth; tests/test_cloth.py asks 45 %)."""
     cut = SKIRT_CUTS[g.cut or GARMENTS[g.kind].cut or "a_line"]
-    n_seg = 48 if not cut.folds else 6 * cut.folds  # six points a fold
+    density = 1 if cut.sharp else density
+    n_seg = density * (48 if not cut.folds else 6 * cut.folds)  # six points a fold
     v = body.vertices[np.isin(r.group, ["torso", "upperleg", "lowerleg"])]  # not the hanging arms
     bottom = r.hip_y - 0.1 - (r.hip_y - 0.1 - 0.15) * g.length
-    heights = np.linspace(top_y, bottom, 14)
+    heights = np.linspace(top_y, bottom, 13 * density + 1)
     centre = v[(v[:, 1] < top_y) & (v[:, 1] > bottom)][:, [0, 2]].mean(0)
     ang = np.linspace(0, 2 * np.pi, n_seg, endpoint=False)
     d = np.stack([np.sin(ang), np.cos(ang)], 1)  # x, z
@@ -520,7 +523,8 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float):
         band = v[np.abs(v[:, 1] - h) < 0.03][:, [0, 2]] - centre
         reach = np.array([(band @ di).max() if len(band) else 0.05 for di in d])
         # the support of the body in each direction; smooth it around the ring
-        reach = np.maximum(reach, np.convolve(np.pad(reach, 3, mode="wrap"), np.ones(7) / 7, "valid"))
+        w = 3 * density  # the same angle at every density
+        reach = np.maximum(reach, np.convolve(np.pad(reach, w, mode="wrap"), np.ones(2 * w + 1) / (2 * w + 1), "valid"))
         radius = reach + offset + (cut.flare + cut.ease_flare * g.ease) * (k / (len(heights) - 1)) ** cut.curve
         if prev is not None:
             radius = np.maximum(radius, prev)  # never narrows downwards
@@ -644,10 +648,10 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     return v, f, uv
 
 
-def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
-    """A bodice (a shell) and a skirt flaring from the hips."""
+def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float, density: int = 1):
+    """A bodice (a shell) and a skirt flaring from the hips (``density``: see ``_flare``)."""
     v, f, uv = _shell_shape(body, r, split, g, cut, offset)
-    sv, sf, suv = _flare(body, r, g, offset, r.hip_y)
+    sv, sf, suv = _flare(body, r, g, offset, r.hip_y, density)
     return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
 
 
@@ -802,14 +806,20 @@ class GarmentShape:
     hemmed: bool = True
     weights: Callable | None = None
     sole: bool = False  # the garment's thickness is a sole the body stands on, not cloth over it
+    dense: bool = False  # ``build`` takes ``density=``: its hanging cloth is made finer to be simulated
 
+
+# How many times finer each way a simulated skirt's flare is than a skinned one's: 96 points
+# round (a circle skirt 120; pleats as cut) in rings 2 cm apart. At 48 round and 4 cm apart,
+# folds 2-15 cm across hardly fit (bench/cloth.py's fold energy; bench/RESULTS.md).
+SIMULATED_DENSITY = 2
 
 # A new garment shape is one entry here; GarmentKind.shape names one.
 GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell": GarmentShape(_shell_shape),
-    "flare": GarmentShape(lambda body, r, split, g, cut, offset: _flare(body, r, g, offset, r.waist_y),
-                          weights=lambda *a: both_legs_weights(*a)),  # hangs across both legs: skinned to both
-    "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a)),
+    "flare": GarmentShape(lambda body, r, split, g, cut, offset, density=1: _flare(body, r, g, offset, r.waist_y, density),
+                          weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
+    "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a), dense=True),
     "shell+collar": GarmentShape(_shell_and(_collar)),
     "shell+hood": GarmentShape(_shell_and(_hood)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
@@ -819,10 +829,11 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
 
 
 def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 0.0,
-                  tuck: bool = False) -> GarmentMesh:
+                  tuck: bool = False, density: int = 1) -> GarmentMesh:
     """The rest-pose garment on ``body``; ``split`` is the body's seam-split render topology.
     ``tuck``: a top worn with a skirt (a kind that ``tucks_tops``) ends ``TUCK`` under the waist, as if tucked in (its hem
-    would otherwise run inside the skirt's flare and show through it in notches)."""
+    would otherwise run inside the skirt's flare and show through it in notches). ``density``: a ``dense`` shape's
+    hanging cloth that many times finer each way (``SIMULATED_DENSITY`` for the cloth stage)."""
     kind = GARMENTS[g.kind]
     fit = garment_fit(kind.layer, g.grade, r.girths) if g.grade is not None and r.girths and not kind.footwear else None
     offset = garment_offset(g, below, fit)
@@ -830,7 +841,8 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     shape = cut_for
     if tuck and kind.layer == Layer.TOP:
         shape = dataclasses.replace(cut_for, length=min(cut_for.length, TUCK / (r.waist_y - (r.crotch_y - 0.12))))
-    v, f, uv = GARMENT_SHAPES[kind.shape].build(body, r, split, cut_for, shape, offset)
+    maker = GARMENT_SHAPES[kind.shape]
+    v, f, uv = maker.build(body, r, split, cut_for, shape, offset, **({"density": density} if maker.dense else {}))
     room = leg_room(g, fit)
     if room and kind.shape == "shell":  # a skirt cut large keeps its flare: only its length grows
         v = _let_out_legs(body, r, v, room)

@@ -16,7 +16,8 @@ from synmitsuba.body.brows import BROW_RADIUS, LASH_RADIUS, eye_region, grow_bro
 from synmitsuba.body.expressions import face_units
 from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
-from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, BodyRegions, GarmentMesh, body_regions, build_garment,
+from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSITY, BodyRegions, GarmentMesh,
+                                      body_regions, build_garment,
                                       footwear_lift, heel_pitches, metres_per_uv)
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
@@ -124,7 +125,8 @@ class LayeredHuman:
         tuck = any(GARMENTS[x.kind].tucks_tops for x in recipe.garments)
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
             footwear = GARMENTS[g.kind].footwear
-            m = build_garment(body, self.regions, self.split, g, 0.0 if footwear else below, tuck=tuck)
+            m = build_garment(body, self.regions, self.split, g, 0.0 if footwear else below, tuck=tuck,
+                              density=SIMULATED_DENSITY if recipe.cloth == "simulated" else 1)
             if not footwear:
                 below = max(below, m.offset)
             self.garments.append(m)

@@ -35,7 +35,8 @@ def preview(args) -> int:
     from synmitsuba.body.recipe import SubjectConfig
     check_motion_source(args.clip, field="CLIP")  # before anything heavy
     try:
-        config = SubjectConfig.from_dict({"outfit": args.outfit.split(",")} if args.outfit else {}, "config")
+        config = SubjectConfig.from_dict({"cloth": "skinned" if args.cloth == "skinned" else "simulated",  # its mesh
+                                          **({"outfit": args.outfit.split(",")} if args.outfit else {})}, "config")
     except ConfigError as e:
         raise ConfigError("--outfit", args.outfit, e.fix) from None
     output_dir(args.out)
