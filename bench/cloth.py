@@ -13,6 +13,11 @@ Printed as JSON, each for the simulated and the skinned garments:
   vertex, 2 mm out along its normal, is itself inside: a thigh run into the buttock; or where
   the closest point on the body's triangles, 2 mm past it, is: a raised thigh in the belly),
   and the deepest (exact distance to the body's triangles), worst frame per clip;
+- garment against garment (skirts over a tucked t-shirt, which ends 3 cm below the waist): the
+  share of the skirt's vertices under the t-shirt's surface (closest point on its triangles,
+  sign from that triangle's normal, within 3 cm; not where that triangle touches the t-shirt's
+  open edges) and the deepest, worst frame; the skinned skirt's figure is the rest geometry's
+  own (the t-shirt is cut over the skirt's tight waistband);
 - folds: the mean squared mean curvature left after taking out its average over 7.5 cm (so the
   body-scale shape, hips and a flare's cone, drops out and folds 2-15 cm across remain), over
   the hanging cloth (not a held waistband or bodice), hem band left out; median over frames;
@@ -67,6 +72,43 @@ def inside(points, body, faces) -> tuple[float, float]:
             deep = max(deep, float(dist[j]))
     ins = np.array(keep, dtype=int)
     return len(ins) / len(points), deep
+
+
+INNER = ("tshirt",)  # worn with a skirt, a top is tucked in: it ends 3 cm below the waist
+
+
+def under(points, inner, faces, edge_faces) -> tuple[float, float]:
+    """(share of ``points``, an outer garment's, under an inner garment's surface, deepest
+    metres): the closest point on its triangles, sign from that triangle's normal (the garment's
+    outside), for points within 3 cm; not where the closest triangle touches its open edges
+    (past a hem or a waist nothing is covered)."""
+    import trimesh
+    from scipy.spatial import cKDTree
+    d, _ = cKDTree(inner).query(points)
+    near = np.flatnonzero(d < 0.03)
+    if not len(near):
+        return 0.0, 0.0
+    mesh = trimesh.Trimesh(inner, faces, process=False)
+    p = points[near]
+    _, cand = cKDTree(mesh.triangles_center).query(p, k=16)  # the nearest triangles' centres: candidates
+    c = trimesh.triangles.closest_point(mesh.triangles[cand.ravel()], np.repeat(p, cand.shape[1], 0))
+    dists = np.linalg.norm(c - np.repeat(p, cand.shape[1], 0), axis=1).reshape(cand.shape)
+    best = dists.argmin(1)
+    rows = np.arange(len(p))
+    tri, dist, closest = cand[rows, best], dists[rows, best], c.reshape(*cand.shape, 3)[rows, best]
+    below = np.einsum("ij,ij->i", p - closest, mesh.face_normals[tri]) < 0
+    hit = below & ~edge_faces[tri]
+    return float(hit.sum()) / len(points), float(dist[hit].max()) if hit.any() else 0.0
+
+
+def edge_faces_of(faces: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """(T,) bool: the triangles with a vertex on an open edge (seam copies welded by position)."""
+    from synmitsuba.body.garments import open_edges
+    from synmitsuba.body.topology import weld
+    rep = weld(rest)
+    edge = np.zeros(len(rest), bool)
+    edge[rep[np.unique(open_edges(faces, rep))]] = True
+    return edge[rep[faces]].any(1)
 
 
 class Surface:
@@ -136,8 +178,10 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
     sim_s = time.perf_counter() - t
     settle = int(round(sm.ClothSettings().settle_s * clip.fps))
     kinds = ("sim", "skinned", "same_mesh")
-    out: dict = {k: {"inside": [], "deepest": [], "folds": []} for k in kinds}
+    out: dict = {k: {"inside": [], "deepest": [], "folds": [], "under": [], "under_deepest": []} for k in kinds}
     hems: dict = {k: [] for k in kinds}
+    inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest)) for p in humans[k].parts
+                      if p.name in INNER), None) for k in ("sim", "skinned")}
     for f in range(clip.n_frames):
         posed = {k: humans[k].pose(*clip.frame(f)) for k in ("sim", "skinned")}
         body = closed_body(human, posed["sim"])
@@ -149,11 +193,18 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
             out[kind]["deepest"].append(deep)
             out[kind]["folds"].append(surfaces[h].fold_energy(v))
             hems[kind].append(surfaces[h].hem(v))
+            if inner[h] is not None and kind != "same_mesh":
+                name, faces, edge = inner[h]
+                share, deep = under(v, next(la.vertices for la in layers if la.name == name), faces, edge)
+                out[kind]["under"].append(share)
+                out[kind]["under_deepest"].append(deep)
     res = {"seconds_per_frame": sim_s / (clip.n_frames + settle), "sim_s": sim_s}
     for kind in kinds:
         o = out[kind]
         res[kind] = {"inside_share_worst_frame": max(o["inside"]), "deepest_m": max(o["deepest"]),
                      "fold_energy": float(np.median(o["folds"]))}
+        if o["under"]:
+            res[kind].update(under_inner_share_worst_frame=max(o["under"]), under_inner_deepest_m=max(o["under_deepest"]))
     if motion in ("walk", "jog", "run", "turn"):
         res["sim"]["hem_lag_ms"] = hem_lag_ms(np.array(hems["sim"]), np.array(hems["same_mesh"]), clip.fps)
     return res
@@ -206,6 +257,11 @@ def summarize(rows: list, head: dict) -> dict:
             "inside_share_max": float(max(r[kind]["inside_share_worst_frame"] for r in rows)),
             "deepest_m_max": round(float(max(r[kind]["deepest_m"] for r in rows)), 4),
             "fold_energy_median": round(float(np.median([r[kind]["fold_energy"] for r in rows])), 2)}
+        layered = [r[kind] for r in rows if "under_inner_deepest_m" in r[kind]]
+        if layered:
+            summary[kind].update(layered_clips=len(layered), under_inner_share_max=max(
+                r["under_inner_share_worst_frame"] for r in layered), under_inner_deepest_m_max=round(
+                max(r["under_inner_deepest_m"] for r in layered), 4))
         lags = [r[kind]["hem_lag_ms"] for r in rows if "hem_lag_ms" in r[kind]]
         if lags:
             summary[kind]["hem_lag_ms_median"] = round(float(np.median(lags)), 1)
