@@ -229,8 +229,9 @@ def test_a_simulated_pleated_skirt_keeps_its_pleats_through_a_walk(skirt_walk):
 
 def test_a_simulated_skirt_is_cut_finer_and_the_same_skirt():
     """Under ``cloth: simulated`` an A-line skirt's flare has SIMULATED_DENSITY times the level
-    rings' spacing and points round (folds 2-15 cm across need them); every other ring's every
-    other point is, within a few millimetres, the skinned recipe's skirt (the same cut)."""
+    rings and the points round, its rings that much closer (folds 2-15 cm across need them);
+    every other ring's every other point is, within a few millimetres, the skinned recipe's
+    skirt (the same cut)."""
     from dataclasses import replace
 
     import synmitsuba as sm

@@ -17,8 +17,7 @@ from synmitsuba.body.expressions import face_units
 from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSITY, BodyRegions, GarmentMesh,
-                                      body_regions, build_garment,
-                                      footwear_lift, heel_pitches, metres_per_uv)
+                                      body_regions, build_garment, footwear_lift, heel_pitches, metres_per_uv)
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
