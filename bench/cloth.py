@@ -13,11 +13,11 @@ Printed as JSON, each for the simulated and the skinned garments:
   vertex, 2 mm out along its normal, is itself inside: a thigh run into the buttock; or where
   the closest point on the body's triangles, 2 mm past it, is: a raised thigh in the belly),
   and the deepest (exact distance to the body's triangles), worst frame per clip;
-- garment against garment (skirts over a tucked t-shirt, which ends 3 cm below the waist): the
-  share of the skirt's vertices under the t-shirt's surface (closest point on its triangles,
-  sign from that triangle's normal, within 3 cm; not where that triangle touches the t-shirt's
-  open edges) and the deepest, worst frame; the skinned skirt's figure is the rest geometry's
-  own (the t-shirt is cut over the skirt's tight waistband);
+- garment against garment (a skirt over the t-shirt tucked into it, which ends 3 cm below the
+  waist): the share of the skirt's vertices under the t-shirt's torso (closest point on its
+  triangles, sign from that triangle's normal, within 3 cm; not where that triangle touches the
+  t-shirt's open edges) and the deepest, worst frame; apart from it, under its sleeves (an arm
+  hanging against the skirt's hips, not a layering);
 - folds: the mean squared mean curvature left after taking out its average over 7.5 cm (so the
   body-scale shape, hips and a flare's cone, drops out and folds 2-15 cm across remain), over
   the hanging cloth (not a held waistband or bodice), hem band left out; median over frames;
@@ -74,14 +74,15 @@ def inside(points, body, faces) -> tuple[float, float]:
     return len(ins) / len(points), deep
 
 
-INNER = ("tshirt",)  # worn with a skirt, a top is tucked in: it ends 3 cm below the waist
+INNER = ("tshirt", "longsleeve")  # worn with a skirt, a top is tucked in: it ends 3 cm below the waist
+ARMS = ("upperarm", "lowerarm", "hand")
 
 
-def under(points, inner, faces, edge_faces) -> tuple[float, float]:
+def under(points, inner, faces, skip) -> tuple[float, float]:
     """(share of ``points``, an outer garment's, under an inner garment's surface, deepest
     metres): the closest point on its triangles, sign from that triangle's normal (the garment's
-    outside), for points within 3 cm; not where the closest triangle touches its open edges
-    (past a hem or a waist nothing is covered)."""
+    outside), for points within 3 cm; not where the closest triangle is one of ``skip`` (those
+    that touch its open edges: past a hem or a waist nothing is covered)."""
     import trimesh
     from scipy.spatial import cKDTree
     d, _ = cKDTree(inner).query(points)
@@ -97,7 +98,7 @@ def under(points, inner, faces, edge_faces) -> tuple[float, float]:
     rows = np.arange(len(p))
     tri, dist, closest = cand[rows, best], dists[rows, best], c.reshape(*cand.shape, 3)[rows, best]
     below = np.einsum("ij,ij->i", p - closest, mesh.face_normals[tri]) < 0
-    hit = below & ~edge_faces[tri]
+    hit = below & ~skip[tri]
     return float(hit.sum()) / len(points), float(dist[hit].max()) if hit.any() else 0.0
 
 
@@ -109,6 +110,14 @@ def edge_faces_of(faces: np.ndarray, rest: np.ndarray) -> np.ndarray:
     edge = np.zeros(len(rest), bool)
     edge[rep[np.unique(open_edges(faces, rep))]] = True
     return edge[rep[faces]].any(1)
+
+
+def sleeve_faces_of(human, part) -> np.ndarray:
+    """(T,) bool: a top's triangles over the arms (their centre's closest rest body vertex is an
+    arm's or a hand's)."""
+    from scipy.spatial import cKDTree
+    _, near = cKDTree(human.body.vertices).query(part.rest[part.faces].mean(1))
+    return np.isin(human.regions.group[near], ARMS)
 
 
 class Surface:
@@ -178,10 +187,11 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
     sim_s = time.perf_counter() - t
     settle = int(round(sm.ClothSettings().settle_s * clip.fps))
     kinds = ("sim", "skinned", "same_mesh")
-    out: dict = {k: {"inside": [], "deepest": [], "folds": [], "under": [], "under_deepest": []} for k in kinds}
+    out: dict = {k: {"inside": [], "deepest": [], "folds": [], "under": [], "under_deepest": [], "sleeve": [],
+                     "sleeve_deepest": []} for k in kinds}
     hems: dict = {k: [] for k in kinds}
-    inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest)) for p in humans[k].parts
-                      if p.name in INNER), None) for k in ("sim", "skinned")}
+    inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest), sleeve_faces_of(humans[k], p))
+                      for p in humans[k].parts if p.name in INNER), None) for k in ("sim", "skinned")}
     for f in range(clip.n_frames):
         posed = {k: humans[k].pose(*clip.frame(f)) for k in ("sim", "skinned")}
         body = closed_body(human, posed["sim"])
@@ -194,17 +204,20 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
             out[kind]["folds"].append(surfaces[h].fold_energy(v))
             hems[kind].append(surfaces[h].hem(v))
             if inner[h] is not None and kind != "same_mesh":
-                name, faces, edge = inner[h]
-                share, deep = under(v, next(la.vertices for la in layers if la.name == name), faces, edge)
-                out[kind]["under"].append(share)
-                out[kind]["under_deepest"].append(deep)
+                name, faces, edge, sleeve = inner[h]
+                top = next(la.vertices for la in layers if la.name == name)
+                for key, skip in (("under", edge | sleeve), ("sleeve", edge | ~sleeve)):
+                    share, deep = under(v, top, faces, skip)
+                    out[kind][key].append(share)
+                    out[kind][f"{key}_deepest"].append(deep)
     res = {"seconds_per_frame": sim_s / (clip.n_frames + settle), "sim_s": sim_s}
     for kind in kinds:
         o = out[kind]
         res[kind] = {"inside_share_worst_frame": max(o["inside"]), "deepest_m": max(o["deepest"]),
                      "fold_energy": float(np.median(o["folds"]))}
         if o["under"]:
-            res[kind].update(under_inner_share_worst_frame=max(o["under"]), under_inner_deepest_m=max(o["under_deepest"]))
+            res[kind].update(under_inner_share_worst_frame=max(o["under"]), under_inner_deepest_m=max(o["under_deepest"]),
+                             under_sleeve_share_worst_frame=max(o["sleeve"]), under_sleeve_deepest_m=max(o["sleeve_deepest"]))
     if motion in ("walk", "jog", "run", "turn"):
         res["sim"]["hem_lag_ms"] = hem_lag_ms(np.array(hems["sim"]), np.array(hems["same_mesh"]), clip.fps)
     return res
@@ -218,6 +231,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--cold-cache", action="store_true", help="compile Warp's kernels afresh (a temporary cache)")
     ap.add_argument("--first", type=int, default=0, help="the first subject (seed 100 + first): split a run over processes")
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
+    ap.add_argument("--garments", default="skirt,dress", help="only the subjects wearing these (skirt: the layered ones)")
     ap.add_argument("--summarize", nargs="+", help="print the summary of these rows files and stop")
     args = ap.parse_args(argv)
     if args.summarize:
@@ -230,6 +244,8 @@ def main(argv=None) -> dict:
     rows, first_s = [], None
     for i in range(args.first, args.first + args.subjects):
         garment = ("skirt", "dress")[i % 2]
+        if garment not in args.garments.split(","):
+            continue
         outfit = ["tshirt", "skirt"] if garment == "skirt" else ["dress"]
         recipe = sm.sample_subject(np.random.default_rng(100 + i), {
             "outfit": outfit, "jacket": False, "shoes": True, "cloth": "simulated", "texture_size": 64})
@@ -262,6 +278,10 @@ def summarize(rows: list, head: dict) -> dict:
             summary[kind].update(layered_clips=len(layered), under_inner_share_max=max(
                 r["under_inner_share_worst_frame"] for r in layered), under_inner_deepest_m_max=round(
                 max(r["under_inner_deepest_m"] for r in layered), 4))
+            sleeves = [r for r in layered if "under_sleeve_deepest_m" in r]  # rows before sleeves were apart
+            if sleeves:
+                summary[kind].update(under_sleeve_share_max=max(r["under_sleeve_share_worst_frame"] for r in sleeves),
+                                     under_sleeve_deepest_m_max=round(max(r["under_sleeve_deepest_m"] for r in sleeves), 4))
         lags = [r[kind]["hem_lag_ms"] for r in rows if "hem_lag_ms" in r[kind]]
         if lags:
             summary[kind]["hem_lag_ms_median"] = round(float(np.median(lags)), 1)

@@ -1201,13 +1201,38 @@ def test_drape_hangs_cloth_from_what_is_above_at_its_slope():
 
 
 def test_a_top_over_a_skirt_is_tucked_at_the_waist(human):
-    """With ``tuck`` (the outfit has a skirt) a long top ends TUCK under the waist, over the
-    skirt's band, instead of inside its flare; without it, where its length says."""
+    """With ``tuck`` (the outfit has a skirt) a long top ends TUCK under the waist, inside the
+    skirt's band, instead of down in its flare; without it, where its length says."""
     from synmitsuba.body.garments import TUCK, GarmentParams, build_garment
     g = GarmentParams(kind="tshirt", length=0.7)
     r = human.regions
     low = {t: build_garment(human.body, r, human.split, g, tuck=t).vertices[:, 1].min() for t in (False, True)}
     assert low[True] == pytest.approx(r.waist_y - TUCK, abs=0.012) and low[False] < r.waist_y - TUCK - 0.05
+
+
+def test_a_skirt_is_dressed_over_the_top_tucked_into_it():
+    """Tucked in, a top is under its skirt all the way down: a horizontal ray from the body's
+    axis out to any skirt vertex at the top's heights crosses the top's shell once (the skirt
+    is outside it), and the skirt's waistband stands further out than the top. Before, the top
+    was dressed over the skirt's band and its tucked end ran inside the flare: the two crossed."""
+    from reference import crossings
+    recipe = sm.sample_subject(np.random.default_rng(12), {"outfit": ["longsleeve", "skirt"], "jacket": False,
+                                                           "shoes": False, "texture_size": 64})
+    h = sm.build_subject(recipe)
+    top, skirt = (next(m for m in h.garments if m.params.kind == k) for k in ("longsleeve", "skirt"))
+    assert skirt.offset >= top.offset + 0.004
+    tri = top.vertices[top.faces[:len(top.faces) - top.hem[0]]]  # its shell, not the turned-in hem band
+    torso = h.body.vertices[h.regions.group == "torso"]
+    low = top.vertices[:, 1].min() + 0.005
+    checked = 0
+    for p in skirt.vertices[skirt.vertices[:, 1] > low]:
+        ring = torso[np.abs(torso[:, 1] - p[1]) < 0.01]
+        origin = np.array([ring[:, 0].mean() + 0.001, p[1], ring[:, 2].mean()])  # off the mirror plane's seam
+        d = p - origin
+        n = crossings(origin, d[None] / np.linalg.norm(d), tri, np.array([np.linalg.norm(d)]))[0]
+        assert n == 1, (p, n)
+        checked += 1
+    assert checked >= 48  # two rings of the band at least
 
 
 def test_every_skirt_cut_has_its_folds_and_flare(human):

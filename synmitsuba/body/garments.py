@@ -147,7 +147,8 @@ class GarmentKind:
     """Everything a garment kind is. ``shape``: ``shell`` (the region offset from the body),
     ``flare`` (a skirt surface from the waist), ``shell+flare`` (a dress: bodice + skirt) or
     ``hull`` (convex hull of the region, for shoes). ``order``: dressing order, lower goes on
-    first and higher kinds sit outside it (shoes are separate)."""
+    first and higher kinds sit outside it (shoes are separate): bottoms 1 (a top hangs over
+    them), tops and dresses 2, a skirt 3 (over the top tucked into it), jackets and coats 4."""
 
     layer: Layer
     offset: float                 # base offset from the body surface, metres
@@ -172,20 +173,20 @@ GARMENTS: dict[str, GarmentKind] = {
                           fabric="jersey"),
     "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8),
                               fabric="jersey"),
-    "jacket": GarmentKind(Layer.TOP, 0.03, 3, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
+    "jacket": GarmentKind(Layer.TOP, 0.03, 4, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
                           (0.005, 0.03), (0.002, 0.01), fabric="twill"),
     "tank": GarmentKind(Layer.TOP, 0.01, 2, "shell", _tank, (0.25, 0.7), fabric="jersey"),
     "sweater": GarmentKind(Layer.TOP, 0.018, 2, "shell", _top(lambda L: 0.92 + 0.06 * L), (0.45, 0.8),
                            (0.01, 0.03), (0.004, 0.008), fabric="jersey"),
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
-    "coat": GarmentKind(Layer.TOP, 0.025, 3, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
+    "coat": GarmentKind(Layer.TOP, 0.025, 4, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
                         (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
     "hoodie": GarmentKind(Layer.TOP, 0.016, 2, "shell+hood", _top(lambda L: 0.95 + 0.05 * L), (0.45, 0.8),
                           (0.01, 0.03), (0.003, 0.006), fabric="jersey"),
     "shirt": GarmentKind(Layer.TOP, 0.012, 2, "shell+collar", _top(lambda L: 0.93 + 0.07 * L), (0.4, 0.8),
                          (0.005, 0.02), (0.002, 0.004), fabric="plain"),
     # a blazer: a jacket's hip-length bodice, open over the top in a V down to its buttons
-    "blazer": GarmentKind(Layer.TOP, 0.025, 3, "shell", _open_front(_top(lambda L: 0.95), BLAZER_V), (0.3, 0.55),
+    "blazer": GarmentKind(Layer.TOP, 0.025, 4, "shell", _open_front(_top(lambda L: 0.95), BLAZER_V), (0.3, 0.55),
                           (0.005, 0.02), (0.003, 0.008), fabric="plain"),
     "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
                             fabric="twill"),
@@ -198,7 +199,7 @@ GARMENTS: dict[str, GarmentKind] = {
     # joggers: jersey, ending gathered above the ankle (their taper and cuffs are not modelled)
     "joggers": GarmentKind(Layer.BOTTOM, 0.008, 1, "shell", _bottom(lambda L: 0.9 + 0.06 * L), (0.0, 1.0),
                            (0.005, 0.02), (0.002, 0.005), fabric="jersey"),
-    "skirt": GarmentKind(Layer.BOTTOM, 0.006, 1, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
+    "skirt": GarmentKind(Layer.BOTTOM, 0.006, 3, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
                          tucks_tops=True),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
                          (0.005, 0.03), skirted=True, takes_jacket=False),
