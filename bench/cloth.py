@@ -16,7 +16,7 @@ Printed as JSON, each for the simulated and the skinned garments:
 - garment against garment (a skirt over the t-shirt tucked into it, which ends 3 cm below the
   waist): the share of the skirt's vertices under the t-shirt's torso (closest point on its
   triangles, sign from that triangle's normal, within 3 cm; not where that triangle touches the
-  t-shirt's open edges) and the deepest, worst frame; apart from it, under its sleeves (an arm
+  t-shirt's open edges or its hem's fold: below its end nothing is covered) and the deepest, worst frame; apart from it, under its sleeves (an arm
   hanging against the skirt's hips, not a layering);
 - folds: the mean squared mean curvature left after taking out its average over 7.5 cm (so the
   body-scale shape, hips and a flare's cone, drops out and folds 2-15 cm across remain), over
@@ -102,14 +102,22 @@ def under(points, inner, faces, skip) -> tuple[float, float]:
     return float(hit.sum()) / len(points), float(dist[hit].max()) if hit.any() else 0.0
 
 
-def edge_faces_of(faces: np.ndarray, rest: np.ndarray) -> np.ndarray:
-    """(T,) bool: the triangles with a vertex on an open edge (seam copies welded by position)."""
+def edge_faces_of(faces: np.ndarray, rest: np.ndarray, fold=()) -> np.ndarray:
+    """(T,) bool: the triangles with a vertex on an open edge or on ``fold`` (a hem's fold line:
+    its turned-in band's open edge is inside), seam copies welded by position."""
     from synmitsuba.body.garments import open_edges
     from synmitsuba.body.topology import weld
     rep = weld(rest)
     edge = np.zeros(len(rest), bool)
     edge[rep[np.unique(open_edges(faces, rep))]] = True
+    edge[rep[np.asarray(fold, dtype=int)]] = True
     return edge[rep[faces]].any(1)
+
+
+def fold_of(human, name: str) -> np.ndarray:
+    """A garment's hem fold line: the shell's edge vertices its turned-in band hangs from."""
+    from synmitsuba.body.garments import hem_sources
+    return hem_sources(next(g for g in human.garments if g.params.kind == name))
 
 
 def sleeve_faces_of(human, part) -> np.ndarray:
@@ -190,8 +198,9 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
     out: dict = {k: {"inside": [], "deepest": [], "folds": [], "under": [], "under_deepest": [], "sleeve": [],
                      "sleeve_deepest": []} for k in kinds}
     hems: dict = {k: [] for k in kinds}
-    inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest), sleeve_faces_of(humans[k], p))
-                      for p in humans[k].parts if p.name in INNER), None) for k in ("sim", "skinned")}
+    inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest, fold_of(humans[k], p.name)),
+                       sleeve_faces_of(humans[k], p)) for p in humans[k].parts if p.name in INNER), None)
+             for k in ("sim", "skinned")}
     for f in range(clip.n_frames):
         posed = {k: humans[k].pose(*clip.frame(f)) for k in ("sim", "skinned")}
         body = closed_body(human, posed["sim"])

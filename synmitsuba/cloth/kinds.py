@@ -9,7 +9,7 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.garments import SKIRT_CUTS, BodyRegions, GarmentParams
+from synmitsuba.body.garments import SKIRT_CUTS, TUCK, BodyRegions, GarmentParams
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,9 @@ def top(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
 
 # One entry per simulated garment kind (a name in body.garments.GARMENTS).
 CLOTH_KINDS: dict[str, ClothKind] = {
-    "skirt": ClothKind("woven", top(0.02)),  # hangs from its waistband
+    # hangs from its waistband and yoke, held down past the end of a top tucked into it (the cloth
+    # stage's collider is the body alone: a free skirt fell 2-3 cm into the tucked top's end)
+    "skirt": ClothKind("woven", top(TUCK + 0.01)),
     "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
     "shift": ClothKind("woven", above("hip_y", 0.02)),
     "wrap": ClothKind("jersey", above("hip_y", 0.02)),
