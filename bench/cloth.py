@@ -16,8 +16,9 @@ Printed as JSON, each for the simulated and the skinned garments:
 - garment against garment (a skirt over the t-shirt tucked into it, which ends 3 cm below the
   waist): the share of the skirt's vertices under the t-shirt's torso (closest point on its
   triangles, sign from that triangle's normal, within 3 cm; not where that triangle touches the
-  t-shirt's open edges or its hem's fold: below its end nothing is covered) and the deepest, worst frame; apart from it, under its sleeves (an arm
-  hanging against the skirt's hips, not a layering);
+  t-shirt's open edges or its hem's fold: below its end nothing is covered) and the deepest,
+  worst frame; apart from it, under its sleeves (an arm hanging against the skirt's hips, not a
+  layering);
 - folds: the mean squared mean curvature left after taking out its average over 7.5 cm (so the
   body-scale shape, hips and a flare's cone, drops out and folds 2-15 cm across remain), over
   the hanging cloth (not a held waistband or bodice), hem band left out; median over frames;
