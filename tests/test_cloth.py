@@ -84,6 +84,37 @@ def test_keep_outside_sets_points_in_or_near_a_sphere_its_margin_out_and_leaves_
     assert np.array_equal(out[~moved], points[~moved])
 
 
+def test_a_waist_seal_keeps_what_rose_inside_the_band_under_it_in_the_moved_waists_frame():
+    """A cylinder "body" and an elliptic band (held) round it, moved by a known rotation and
+    shift: a free particle inside the band's bottom ring and above it ends ``SEAL_GAP`` under
+    the ring in the moved frame, at the same place across; free particles outside the ring,
+    under it, and the held band are returned bit for bit."""
+    from scipy.spatial.transform import Rotation
+
+    from synmitsuba.cloth.seal import SEAL_GAP, rigid_fit, waist_seal
+    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    ring = np.stack([0.16 * np.cos(a), np.zeros_like(a), 0.12 * np.sin(a)], 1)
+    band = np.concatenate([ring + [0, y, 0] for y in (1.0, 1.02, 1.04)])         # held, bottom ring at 1.0
+    free = np.array([[0.05, 1.03, 0.02], [-0.1, 1.001, 0.0], [0.0, 0.99, 0.05],   # inside: above, just above, under
+                     [0.2, 1.02, 0.0], [0.0, 1.03, 0.14]])                        # outside the ring, above it
+    rest = np.concatenate([band, free])
+    held = np.arange(len(rest)) < len(band)
+    body = np.concatenate([np.stack([0.1 * np.cos(a), np.full_like(a, y), 0.08 * np.sin(a)], 1)
+                           for y in np.linspace(0.9, 1.1, 9)])
+    seal = waist_seal(rest, held, np.arange(len(rest)) + 3, body, np.ones(len(body), bool))
+    rot = Rotation.from_euler("xyz", [25, -40, 10], degrees=True).as_matrix()
+    shift = np.array([0.3, -0.2, 1.5])
+    got_rot, got_shift = rigid_fit(body, body @ rot.T + shift)
+    assert np.allclose(got_rot, rot) and np.allclose(got_shift, shift)
+    q = np.concatenate([np.zeros((3, 3)), rest @ rot.T + shift])
+    out = seal.apply(body @ rot.T + shift, q)
+    back = (out[3:] - shift) @ rot                                                  # in the rest frame again
+    moved = np.zeros(len(rest), bool)
+    moved[len(band):len(band) + 2] = True
+    assert np.allclose(back[moved, 1], 1.0 - SEAL_GAP) and np.allclose(back[moved][:, [0, 2]], free[:2, [0, 2]])
+    assert np.array_equal(out[3:][~moved], q[3:][~moved]) and np.array_equal(out[:3], q[:3])
+
+
 def test_two_layers_of_cloth_dropped_on_a_sphere_stay_layered():
     """Two squares 3 cm apart fall on the sphere: with self-contact (``self_contact=True``) the
     upper one rests on the lower, every particle of it at least half the contact margin (and at
@@ -225,6 +256,28 @@ def test_a_simulated_pleated_skirt_keeps_its_pleats_through_a_walk(skirt_walk):
         assert at_rest > 0.5 * SKIRT_CUTS["pleated"].depth, ring
         kept = np.array([_pleat_depth(q[ring], pattern, 3) for q in walk]) / at_rest
         assert (kept.min() if least else np.median(kept)) > (least or 0.2), (ring, np.round(kept, 2))
+
+
+@pytest.mark.parametrize("length", [0.15, 0.85])
+def test_a_simulated_skirts_held_band_reaches_past_the_end_of_the_top_tucked_into_it(length):
+    """Under ``cloth: simulated`` the skirt is held (moved with the body) from its waistband
+    down past the tucked top's end by at least a centimetre, for a short skirt's close rings and
+    a long one's wide ones; and not much further (the rest hangs). Held its top 4 cm alone, rings
+    2.05 cm apart stopped 1 cm above the top's end, and a squat drew the next ring in under it."""
+    from dataclasses import replace
+
+    import synmitsuba as sm
+    from synmitsuba.cloth import CLOTH_KINDS
+    recipe = sm.sample_subject(np.random.default_rng(5), {"outfit": ["tshirt", "skirt"], "jacket": False,
+                                                          "shoes": False, "cloth": "simulated", "texture_size": 64})
+    recipe = replace(recipe, garments=[replace(g, length=length) if g.kind == "skirt" else g for g in recipe.garments])
+    human = sm.build_subject(recipe)
+    part, top = (next(p for p in human.parts if p.name == k) for k in ("skirt", "tshirt"))
+    held = CLOTH_KINDS["skirt"].held(part.rest, human.regions)
+    end = top.rest[:, 1].min()
+    lowest = part.rest[held, 1].min()
+    assert end - 0.045 < lowest < end - 0.01, (end, lowest)
+    assert (part.rest[~held, 1] < lowest).all() and (~held).sum() > 0.6 * len(held)
 
 
 def test_a_simulated_skirt_is_cut_finer_and_the_same_skirt():

@@ -16,6 +16,7 @@ from synmitsuba.body.garments import SKIRT_CUTS, TUCK, BodyRegions, GarmentParam
 class ClothKind:
     fabric: str                # a name in ``fabrics.FABRICS``
     held: Callable[[np.ndarray, BodyRegions], np.ndarray]  # (rest vertices, body regions) -> (V,) bool
+    sealed: bool = False       # its held band closes it round the body: nothing inside rises past it (``seal``)
 
 
 def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
@@ -26,18 +27,25 @@ def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.
     return held
 
 
-def top(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
-    """Hold the garment's top ``band`` metres (a skirt's waistband)."""
+def through(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
+    """Hold the garment's top ``band`` metres and the first ring of vertices under them (those
+    within 5 mm of the highest vertex below the band: a level-cut skirt's rings are 1.5-3 cm
+    apart, as its length is), so the held edge is at least ``band`` down whatever the spacing."""
     def held(rest: np.ndarray, regions: BodyRegions) -> np.ndarray:
-        return rest[:, 1] >= rest[:, 1].max() - band
+        y = rest[:, 1]
+        inside = y >= y.max() - band
+        below = y[~inside]
+        return inside | (y >= below.max() - 0.005) if len(below) else inside
     return held
 
 
 # One entry per simulated garment kind (a name in body.garments.GARMENTS).
 CLOTH_KINDS: dict[str, ClothKind] = {
     # hangs from its waistband and yoke, held down past the end of a top tucked into it (the cloth
-    # stage's collider is the body alone: a free skirt fell 2-3 cm into the tucked top's end)
-    "skirt": ClothKind("woven", top(TUCK + 0.01)),
+    # stage's collider is the body alone: a free skirt fell 2-3 cm into the tucked top's end; held
+    # the top 4 cm alone, rings 2.05 cm apart left the lowest held one 1 cm above that end, and a
+    # squat drew the next in under it), and sealed by it (a jump threw a circle skirt's hem up inside it)
+    "skirt": ClothKind("woven", through(TUCK + 0.01), sealed=True),
     "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
     "shift": ClothKind("woven", above("hip_y", 0.02)),
     "wrap": ClothKind("jersey", above("hip_y", 0.02)),

@@ -187,10 +187,28 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
         layers = human.pose(*motion.frame(frame), face=motion.face_at(frame))
         return human.closed_body(layers), np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
 
+    seals = _seals(human, garments)
+
     def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
+        for seal in seals:
+            q = seal.apply(body, q)
         return out_of_body(human, body, q, s.particle_radius / 2)
 
     return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project)
+
+
+def _seals(human, garments: list[_Garment]) -> list:
+    """A ``WaistSeal`` for each garment whose kind is ``sealed`` (a skirt's waistband)."""
+    from synmitsuba.cloth.seal import waist_seal
+    out, start = [], 0
+    for g in garments:
+        n = len(g.rows)
+        if CLOTH_KINDS[g.name].sealed:
+            rest = human.parts[g.part].rest[g.rows]
+            out.append(waist_seal(rest, g.piece.held, np.arange(start, start + n), human.body.vertices,
+                                  human.regions.group == "torso"))
+        start += n
+    return out
 
 
 def out_of_body(human, body: np.ndarray, q: np.ndarray, margin: float) -> np.ndarray:
