@@ -92,6 +92,17 @@ def frame(forward, up, keep: str = "up") -> np.ndarray:
     return np.stack([side, u, f], 1)
 
 
+def rigid_fit(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rotation R, translation t) with b ~ a @ R.T + t, least squares (Kabsch, no reflection).
+    Sums by einsum, not BLAS: the same bits whatever the thread count (the cloth stage fits one
+    a frame)."""
+    ca, cb = a.mean(0), b.mean(0)
+    u, _, vt = np.linalg.svd(np.einsum("ni,nj->ij", a - ca, b - cb))
+    d = np.sign(np.linalg.det(u @ vt))
+    rot = (u @ np.diag([1.0, 1.0, d]) @ vt).T
+    return rot, cb - np.einsum("j,ij->i", ca, rot)
+
+
 def bounds(points) -> tuple[np.ndarray, np.ndarray]:
     """(min (D,), max (D,)) of ``points`` (N, D), column by column: ``points.min(0)`` on a
     (140k, 3) array takes 3.7 ms, a column at a time 0.15 ms."""

@@ -91,7 +91,8 @@ def test_a_waist_seal_keeps_what_rose_inside_the_band_under_it_in_the_moved_wais
     under it, and the held band are returned bit for bit."""
     from scipy.spatial.transform import Rotation
 
-    from synmitsuba.cloth.seal import SEAL_GAP, rigid_fit, waist_seal
+    from synmitsuba.cloth.seal import SEAL_GAP, waist_seal
+    from synmitsuba.geometry import rigid_fit
     a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
     ring = np.stack([0.16 * np.cos(a), np.zeros_like(a), 0.12 * np.sin(a)], 1)
     band = np.concatenate([ring + [0, y, 0] for y in (1.0, 1.02, 1.04)])         # held, bottom ring at 1.0

@@ -24,6 +24,7 @@ import numpy as np
 
 from synmitsuba.body.textures import lab_to_linear_rgb
 from synmitsuba.body.topology import closed_tube, merge_meshes
+from synmitsuba.geometry import rigid_fit
 from synmitsuba.scene.materials import Material
 
 JAW_UNITS = ("jawOpen", "jawForward", "jawLeft", "jawRight")
@@ -233,14 +234,11 @@ def _rotation(rotvec: np.ndarray) -> np.ndarray:
 def _rigid_fit(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotation (as a rotation vector) and shift of ``a``'s centroid taking ``a`` onto ``b`` best
     (Kabsch)."""
-    ca, cb = a.mean(0), b.mean(0)
-    U, _, Vt = np.linalg.svd((a - ca).T @ (b - cb))
-    d = np.sign(np.linalg.det(Vt.T @ U.T))
-    R = Vt.T @ np.diag([1, 1, d]) @ U.T
+    R = rigid_fit(a, b)[0]
     angle = np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))
     axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
     n = np.linalg.norm(axis)
-    return (axis / n * angle if n > 1e-12 else np.zeros(3)), cb - ca
+    return (axis / n * angle if n > 1e-12 else np.zeros(3)), b.mean(0) - a.mean(0)
 
 
 @dataclass(frozen=True)

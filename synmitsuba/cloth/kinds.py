@@ -29,8 +29,9 @@ def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.
 
 def through(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
     """Hold the garment's top ``band`` metres and the first ring of vertices under them (those
-    within 5 mm of the highest vertex below the band: a level-cut skirt's rings are 1.5-3 cm
-    apart, as its length is), so the held edge is at least ``band`` down whatever the spacing."""
+    within 5 mm of the highest vertex below the band: a simulated skirt's level rings are 2-6.5
+    cm apart, a short skirt's to a long one's), so the held edge is at least ``band`` down
+    whatever the spacing."""
     def held(rest: np.ndarray, regions: BodyRegions) -> np.ndarray:
         y = rest[:, 1]
         inside = y >= y.max() - band

@@ -10,21 +10,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.geometry import rigid_fit
+
 SEAL_GAP = 0.005  # metres under the band's bottom ring a particle is set
 
 
 @dataclass(frozen=True)
 class WaistSeal:
-    """For one garment's particles (``rows`` in the concatenated particle array): its free
-    ones' ``free`` rows, the band's bottom ring in the rest pose (``ring``: (R, 3); its height
-    ``bottom``; ``centre`` the ring's xz centre) and the body's rest ``waist`` vertices (their
-    indices ``anchors``) that the waist's frame is fitted to."""
+    """For one garment: its free particles' rows among all particles (``free``), the band's
+    bottom ring in the rest pose (its height ``bottom``; its points' angles about its xz
+    ``centre``, sorted and wrapped round, and their radii) and the body's rest ``waist``
+    vertices (their indices ``anchors``) that the waist's frame is fitted to."""
 
-    rows: np.ndarray
     free: np.ndarray
-    ring: np.ndarray
     bottom: float
     centre: np.ndarray
+    angles: np.ndarray
+    radii: np.ndarray
     anchors: np.ndarray
     waist: np.ndarray
 
@@ -32,25 +34,17 @@ class WaistSeal:
         """``q`` (all particles) with this garment's free ones that have risen inside the band
         set ``SEAL_GAP`` under its bottom ring; the others untouched (bit for bit)."""
         rot, shift = rigid_fit(self.waist, body[self.anchors])
-        p = np.einsum("ij,jk->ik", q[self.rows[self.free]] - shift, rot)  # in the rest pose's frame
+        p = np.einsum("ij,jk->ik", q[self.free] - shift, rot)  # in the rest pose's frame
         rel = p[:, [0, 2]] - self.centre
         up = p[:, 1] > self.bottom - SEAL_GAP
-        inside = np.hypot(*rel.T) < self.radius_at(np.arctan2(rel[:, 1], rel[:, 0]))
+        inside = np.hypot(*rel.T) < np.interp(np.arctan2(rel[:, 1], rel[:, 0]), self.angles, self.radii)
         hit = np.flatnonzero(up & inside)
         if not len(hit):
             return q
         p[hit, 1] = self.bottom - SEAL_GAP
         q = q.copy()
-        q[self.rows[self.free][hit]] = np.einsum("ij,kj->ik", p[hit], rot) + shift
+        q[self.free[hit]] = np.einsum("ij,kj->ik", p[hit], rot) + shift
         return q
-
-    def radius_at(self, angle: np.ndarray) -> np.ndarray:
-        """The band's bottom ring's radius about ``centre`` at each angle (linear between its points)."""
-        rel = self.ring[:, [0, 2]] - self.centre
-        a = np.arctan2(rel[:, 1], rel[:, 0])
-        order = np.argsort(a)
-        a, r = a[order], np.hypot(*rel.T)[order]
-        return np.interp(angle, np.r_[a[-1] - 2 * np.pi, a, a[0] + 2 * np.pi], np.r_[r[-1], r, r[0]])
 
 
 def waist_seal(rest: np.ndarray, held: np.ndarray, rows: np.ndarray, body_rest: np.ndarray,
@@ -59,18 +53,12 @@ def waist_seal(rest: np.ndarray, held: np.ndarray, rows: np.ndarray, body_rest: 
     ``held`` which are held, ``rows`` where they are among all particles; ``body_rest`` the body's
     rest vertices, ``torso`` (V,) which are the torso's (the waist's frame is fitted to those from
     the band's bottom up to 3 cm over its top)."""
-    bottom = float(rest[held, 1].min())
-    ring = rest[held & (rest[:, 1] < bottom + 0.005)]
-    top = float(rest[held, 1].max())
+    bottom, top = float(rest[held, 1].min()), float(rest[held, 1].max())
+    ring = rest[held & (rest[:, 1] < bottom + 0.005)][:, [0, 2]]
+    centre = ring.mean(0)
+    a, r = np.arctan2(*(ring - centre).T[::-1]), np.hypot(*(ring - centre).T)
+    order = np.argsort(a)
+    a, r = a[order], r[order]  # wrapped round: np.interp is linear across the seam at +-pi
+    angles, radii = np.r_[a[-1] - 2 * np.pi, a, a[0] + 2 * np.pi], np.r_[r[-1], r, r[0]]
     anchors = np.flatnonzero(torso & (body_rest[:, 1] >= bottom) & (body_rest[:, 1] <= top + 0.03))
-    return WaistSeal(rows, np.flatnonzero(~held), ring, bottom, ring[:, [0, 2]].mean(0), anchors, body_rest[anchors])
-
-
-def rigid_fit(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(rotation R, translation t) with b ~ a @ R.T + t, least squares (Kabsch, no reflection).
-    Sums by einsum, not BLAS: the same bits whatever the thread count."""
-    ca, cb = a.mean(0), b.mean(0)
-    u, _, vt = np.linalg.svd(np.einsum("ni,nj->ij", a - ca, b - cb))
-    d = np.sign(np.linalg.det(u @ vt))
-    rot = (u @ np.diag([1.0, 1.0, d]) @ vt).T
-    return rot, cb - np.einsum("j,ij->i", ca, rot)
+    return WaistSeal(rows[~held], bottom, centre, angles, radii, anchors, body_rest[anchors])

@@ -22,6 +22,7 @@ from synmitsuba.body.garments import hem_sources
 from synmitsuba.body.topology import weld
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
 from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
+from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.errors import SynMitsubaError
 from synmitsuba.geometry import vertex_normals
 
@@ -197,9 +198,8 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
     return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project)
 
 
-def _seals(human, garments: list[_Garment]) -> list:
+def _seals(human, garments: list[_Garment]) -> list[WaistSeal]:
     """A ``WaistSeal`` for each garment whose kind is ``sealed`` (a skirt's waistband)."""
-    from synmitsuba.cloth.seal import waist_seal
     out, start = [], 0
     for g in garments:
         n = len(g.rows)
