@@ -22,6 +22,9 @@ Printed as JSON, each for the simulated and the skinned garments:
 - folds: the mean squared mean curvature left after taking out its average over 7.5 cm (so the
   body-scale shape, hips and a flare's cone, drops out and folds 2-15 cm across remain), over
   the hanging cloth (not a held waistband or bodice), hem band left out; median over frames;
+- rise: how far the hanging cloth's highest vertex is over the held part's lowest, worst frame
+  (a skirt's hem thrown up; ``--start-at-rest`` measures the cloth started at rest, as before
+  it took its held part's velocity when the clip starts);
 - hem lag (walk, jog, run, turn): the lag in ms that best lines up the simulated hem's
   horizontal velocity with the same mesh skinned's (which moves with the body), both less their mean
   (the travel), searched over 0-300 ms;
@@ -29,6 +32,7 @@ Printed as JSON, each for the simulated and the skinned garments:
   or with ``--cold-cache`` compiles, Newton's kernels).
 
     python bench/cloth.py [--subjects 10] [--motions walk,run,squat,jump,turn] [--seconds 1.0] [--cold-cache]
+                          [--start-at-rest]
 """
 import argparse
 import json
@@ -152,6 +156,12 @@ class Surface:
         rest = part.rest[self.rows]
         self.low = rest[:, 1] < rest[:, 1].min() + 0.01  # the hem's ring
 
+    def rise(self, vertices: np.ndarray) -> float:
+        """Metres the hanging cloth's highest vertex is over the held part's lowest (a skirt's
+        hem thrown up)."""
+        x = vertices[self.rows][:, 1]
+        return float(x[self.free].max() - x[~self.free].min())
+
     def hem(self, vertices: np.ndarray) -> np.ndarray:
         """The centroid of the hem's ring."""
         return vertices[self.rows][self.low].mean(0)
@@ -196,7 +206,7 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
     sim_s = time.perf_counter() - t
     settle = int(round(sm.ClothSettings().settle_s * clip.fps))
     kinds = ("sim", "skinned", "same_mesh")
-    out: dict = {k: {"inside": [], "deepest": [], "folds": [], "under": [], "under_deepest": [], "sleeve": [],
+    out: dict = {k: {"inside": [], "deepest": [], "folds": [], "rise": [], "under": [], "under_deepest": [], "sleeve": [],
                      "sleeve_deepest": []} for k in kinds}
     hems: dict = {k: [] for k in kinds}
     inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest, fold_of(humans[k], p.name)),
@@ -212,6 +222,7 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
             out[kind]["inside"].append(share)
             out[kind]["deepest"].append(deep)
             out[kind]["folds"].append(surfaces[h].fold_energy(v))
+            out[kind]["rise"].append(surfaces[h].rise(v))
             hems[kind].append(surfaces[h].hem(v))
             if inner[h] is not None and kind != "same_mesh":
                 name, faces, edge, sleeve = inner[h]
@@ -224,7 +235,7 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
     for kind in kinds:
         o = out[kind]
         res[kind] = {"inside_share_worst_frame": max(o["inside"]), "deepest_m": max(o["deepest"]),
-                     "fold_energy": float(np.median(o["folds"]))}
+                     "fold_energy": float(np.median(o["folds"])), "rise_m": max(o["rise"])}
         if o["under"]:
             res[kind].update(under_inner_share_worst_frame=max(o["under"]), under_inner_deepest_m=max(o["under_deepest"]),
                              under_sleeve_share_worst_frame=max(o["sleeve"]), under_sleeve_deepest_m=max(o["sleeve_deepest"]))
@@ -243,6 +254,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
     ap.add_argument("--garments", default="skirt,dress", help="only the subjects wearing these (skirt: the layered ones)")
     ap.add_argument("--summarize", nargs="+", help="print the summary of these rows files and stop")
+    ap.add_argument("--start-at-rest", action="store_true",
+                    help="start the cloth at rest when the clip starts (as before it took its held part's velocity)")
     args = ap.parse_args(argv)
     if args.summarize:
         rows = [json.loads(line) for path in args.summarize for line in open(path) if line.strip()]
@@ -251,6 +264,9 @@ def main(argv=None) -> dict:
         os.environ["WARP_CACHE_PATH"] = tempfile.mkdtemp(prefix="warp-cold-")
     import synmitsuba as sm
     sm.set_variant()
+    if args.start_at_rest:
+        import synmitsuba.cloth.simulate as simulate
+        simulate._start_velocity = lambda pieces, q, *_: np.zeros_like(q, dtype=np.float32)
     rows, first_s = [], None
     for i in range(args.first, args.first + args.subjects):
         garment = ("skirt", "dress")[i % 2]
@@ -283,6 +299,9 @@ def summarize(rows: list, head: dict) -> dict:
             "inside_share_max": float(max(r[kind]["inside_share_worst_frame"] for r in rows)),
             "deepest_m_max": round(float(max(r[kind]["deepest_m"] for r in rows)), 4),
             "fold_energy_median": round(float(np.median([r[kind]["fold_energy"] for r in rows])), 2)}
+        rises = [r[kind]["rise_m"] for r in rows if "rise_m" in r[kind]]  # rows before it was measured lack it
+        if rises:
+            summary[kind].update(rise_m_median=round(float(np.median(rises)), 3), rise_m_max=round(max(rises), 3))
         layered = [r[kind] for r in rows if "under_inner_deepest_m" in r[kind]]
         if layered:
             summary[kind].update(layered_clips=len(layered), under_inner_share_max=max(

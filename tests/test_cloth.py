@@ -138,6 +138,31 @@ def test_two_layers_of_cloth_dropped_on_a_sphere_stay_layered():
     assert r[:len(lower)].min() > R  # and the lower one on the sphere, not in it
 
 
+def test_cloth_starts_the_clip_moving_as_its_held_edge_does():
+    """A square hanging in a vertical plane from its held top two rows, settled, then the rows
+    move off at 1.5 m/s across the plane from the clip's first frame: the free particles start at
+    the held rows' velocity (a clip starts at full speed), so the whole square moves with them,
+    every particle k * 5 cm on at frame k. Measured with the cloth started at rest: the bottom
+    row still where it hung at frame 6 (30 cm behind), the square swung 19 cm out of its plane
+    (so was a circle skirt's hem thrown to the chest in a run's first frames)."""
+    n, fps, v = 9, 30.0, np.array([0.0, 0.0, 1.5])
+    u = np.linspace(-0.2, 0.2, n)
+    x, y = np.meshgrid(u, u + 0.8, indexing="ij")
+    q0 = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], 1)
+    k = np.arange(n * n).reshape(n, n)
+    a, b, c, d = k[:-1, :-1].ravel(), k[1:, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, 1:].ravel()
+    faces = np.concatenate([np.stack([a, c, b], 1), np.stack([b, c, d], 1)])
+    held = q0[:, 1] > 0.94
+    sphere = trimesh.creation.icosphere(subdivisions=1, radius=0.1)
+    far = sphere.vertices + [5.0, 0.5, 0.0]
+    collider = Collider(np.asarray(sphere.faces), lambda f: (far, q0 + max(f, 0) * v / fps), fps, 7)
+    q = drape([ClothPiece(faces, held, FABRICS["woven"])], collider, ClothSettings(settle_s=0.3), names=["square"])
+    moved = (q - q[0])[:, ~held]
+    for f in range(1, 7):
+        assert np.abs(moved[f, :, 2] - f * v[2] / fps).max() < 0.003, (f, np.abs(moved[f, :, 2] - f * v[2] / fps).max())
+        assert np.abs(moved[f, :, :2]).max() < 0.003
+
+
 def test_a_diverging_cloth_is_an_error_naming_it_and_the_frame():
     with pytest.raises(ClothError, match=r"square diverged at clip frame 0 .*substeps"):
         _sphere_drape(frames=2, max_drift=1e-4)

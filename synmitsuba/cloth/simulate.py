@@ -7,8 +7,9 @@ waistband, a bodice) are not simulated but moved to the skinned garment's place 
 substep, and the rest hangs from them; its hem band (the turned-in edge) is not simulated
 either but set, each frame, its depth in from its edge along the cloth's normal. The cloth
 first hangs at the clip's first pose for ``settle_s`` (from the skinned garment: gravity takes
-out its shell's stiffness), then follows the clip frame by frame, the body and the held
-vertices moved linearly between frames over the substeps. Newton's full-surface contacts (the
+out its shell's stiffness), then follows the clip frame by frame, starting at the velocity its
+held part moves at (a clip starts at full speed), the body and the held vertices moved linearly
+between frames over the substeps. Newton's full-surface contacts (the
 body's edges and faces against the cloth's, not only its vertices) keep a leg from passing
 between the cloth's vertices."""
 from __future__ import annotations
@@ -24,7 +25,7 @@ from synmitsuba.cloth.fabrics import FABRICS, Fabric
 from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.errors import SynMitsubaError
-from synmitsuba.geometry import vertex_normals
+from synmitsuba.geometry import rigid_fit, vertex_normals
 
 
 class ClothError(SynMitsubaError, RuntimeError):
@@ -286,6 +287,8 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
         now = collider.at(f) if f > 0 else (body0, q0)
         n = _substeps(prev[0][near], now[0][near], s)
         dt = 1.0 / collider.fps / n
+        if f == 1:
+            s0.particle_qd.assign(_start_velocity(pieces, s0.particle_q.numpy(), prev[1], now[1], collider.fps))
         for k in range(n):
             w = (k + 1) / n
             if f > 0:
@@ -307,6 +310,27 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
             _check(out[f], now[1], pieces, names, f, s.max_drift)
         prev = now
     return out
+
+
+def _start_velocity(pieces: list[ClothPiece], q: np.ndarray, held_from: np.ndarray, held_to: np.ndarray,
+                    fps: float) -> np.ndarray:
+    """(P, 3) float32 velocities that move each piece's particles ``q`` as its held ones move
+    from ``held_from`` to ``held_to`` in a frame (a rigid fit): a clip starts at full speed, and
+    cloth settled at rest was thrown (a circle skirt's hem to the chest in a run's first frames)."""
+    out, start = np.zeros_like(q, dtype=np.float64), 0
+    for p in pieces:
+        part = slice(start, start + len(p.held))
+        start += len(p.held)
+        a, b = held_from[part][p.held], held_to[part][p.held]
+        if not len(a):
+            continue
+        spread = np.linalg.svd(a - a.mean(0), compute_uv=False)
+        if len(spread) > 1 and spread[1] > 1e-6 * spread[0]:  # a turn is fixed unless the held points are on a line
+            rot, t = rigid_fit(a, b)
+            out[part] = (np.einsum("ij,kj->ik", q[part], rot) + t - q[part]) * fps  # not BLAS: same bits at any thread count
+        else:
+            out[part] = (b - a).mean(0) * fps
+    return out.astype(np.float32)
 
 
 def _near(collider: np.ndarray, q: np.ndarray, reach: float = 0.15) -> np.ndarray:
