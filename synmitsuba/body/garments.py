@@ -659,6 +659,8 @@ def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
 COLLAR_STAND = 0.025  # metres a shirt collar's band rises round the neck
 COLLAR_FALL = 0.038   # and its fall turns down over it, out to the points
 COLLAR_GAP = 0.45     # radians either side of straight ahead the collar is open (its points spread)
+COLLAR_POINT = 0.035  # metres its points reach lower than the fall elsewhere, onto the chest
+COLLAR_LOFT = 0.004   # metres the fall lies out from the shell under it
 
 
 def _neck_edge(r: BodyRegions, v: np.ndarray, f: np.ndarray, ang: np.ndarray):
@@ -679,14 +681,29 @@ def _neck_edge(r: BodyRegions, v: np.ndarray, f: np.ndarray, ang: np.ndarray):
 def _collar(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40):
     """A shirt collar on the shell ``v, f``: a stand rising ``COLLAR_STAND`` from the shell's
     neckline, turned over at its top into a fall ``COLLAR_FALL`` long lying outside it, open
-    at the front where its points spread (and reach 12 mm lower)."""
+    at the front where its points spread and reach ``COLLAR_POINT`` lower, lying on the chest
+    (a fall of one length all round stood off the neck like a funnel)."""
     ang = np.linspace(COLLAR_GAP, 2 * np.pi - COLLAR_GAP, n_seg)
-    front = np.clip(np.cos(ang), 0.0, 1.0)
+    point = (np.clip(np.cos(ang), 0.0, 1.0) / np.cos(COLLAR_GAP)) ** 6  # 1 at the points, ~0 past 60 degrees
     r0, base = _neck_edge(r, v, f, ang)
-    # (radius, height) over the neckline of each ring: the base, the stand's top, the fold, the fall's edge
-    rings = [(0.0, 0.0), (0.002, COLLAR_STAND), (0.008, COLLAR_STAND + 0.004),
-             (0.03, COLLAR_STAND - COLLAR_FALL - 0.012 * front)]
-    return _strip(r, ang, [(r0 + rad, base + h) for rad, h in rings])
+    edge = base + COLLAR_STAND - COLLAR_FALL - COLLAR_POINT * point
+    middle = 0.5 * (base + COLLAR_STAND + 0.004 + edge)
+    # (radius, height) over the neckline of each ring: the base, the stand's top, the fold, down the fall to its edge
+    def out(rad: float, y: np.ndarray) -> np.ndarray:  # over the chest where the points lie on it
+        return r0 + rad + point * np.maximum(_shell_reach(r, v, ang, y, r0) + COLLAR_LOFT - r0 - rad, 0.0)
+    rings = [(r0, base), (r0 + 0.002, base + COLLAR_STAND), (r0 + 0.008, base + COLLAR_STAND + 0.004),
+             (out(0.02, middle), middle), (out(0.03, edge), edge)]
+    return _strip(r, ang, rings)
+
+
+def _shell_reach(r: BodyRegions, v: np.ndarray, ang: np.ndarray, y: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """How far the shell ``v`` reaches from the neck's axis at angles ``ang`` and heights ``y``
+    (its farthest vertex within 2 cm of the height and 0.12 rad of the angle; ``floor`` where
+    none is): where a piece lying over it must stay out of."""
+    rho = np.hypot(v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1])
+    turn = np.arctan2(v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1]) % (2 * np.pi)
+    return np.array([rho[(np.abs(v[:, 1] - yk) < 0.02) & (np.abs((turn - a + np.pi) % (2 * np.pi) - np.pi) < 0.12)]
+                     .max(initial=rk) for a, yk, rk in zip(ang, y, floor)])
 
 
 def _strip(r: BodyRegions, ang: np.ndarray, rings: list):
@@ -718,14 +735,10 @@ def _hood(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40, n_down:
     back = np.clip(-np.cos(ang), 0.0, 1.0)
     depth = HOOD_DEPTH * (0.08 + 0.92 * back ** 1.5)
     rise = 0.5 + 0.5 * back  # the hood rolls thinner towards its front edges
-    rho_v = np.hypot(v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1])
-    ang_v = np.arctan2(v[:, 0] - r.neck_xz[0], v[:, 2] - r.neck_xz[1]) % (2 * np.pi)
     rings = [(r0, base), (r0 + 0.01 * rise, base + 0.03 * rise), (r0 + 0.025 * rise, base + 0.04 * rise)]
     for s in np.linspace(0.0, 1.0, n_down + 1)[1:]:
         y = base + 0.04 * rise - (depth + 0.04 * rise) * s
-        reach = np.array([rho_v[(np.abs(v[:, 1] - yk) < 0.02) & (np.abs((ang_v - a + np.pi) % (2 * np.pi) - np.pi) < 0.12)]
-                          .max(initial=rk) for a, yk, rk in zip(ang, y, r0)])
-        rings.append((np.maximum(reach + HOOD_LOFT, r0 + 0.025 * rise), y))
+        rings.append((np.maximum(_shell_reach(r, v, ang, y, r0) + HOOD_LOFT, r0 + 0.025 * rise), y))
     return _strip(r, ang, rings)
 
 
