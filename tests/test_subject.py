@@ -1387,7 +1387,8 @@ def test_a_hoodie_has_a_hood_lying_down_the_back_outside_its_own_body():
     from straight ahead round its axis), 10 to 20 cm under the neck's base, the hoodie reaches
     1 cm or more farther from the body (the hood lies over its own back); it rises 2 cm or more
     higher there (the hood rolls up round the neck); nothing above the neck's base is inside
-    the body or within 25 degrees of straight ahead (the hood is open at the front)."""
+    the body or within 25 degrees of straight ahead (the hood's front edges come down flat to
+    the neckline where they meet)."""
     h, parts = _dressed(["hoodie", "jeans"])
     _, plain = _dressed(["longsleeve", "jeans"])
     r = h.regions

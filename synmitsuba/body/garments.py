@@ -721,7 +721,7 @@ def _strip(r: BodyRegions, ang: np.ndarray, rings: list):
     return v, faces, uv
 
 
-HOOD_GAP = 0.6      # radians either side of straight ahead a hood's edges leave open at the neck
+HOOD_GAP = 0.15     # radians either side of straight ahead a hood's edges leave open at the neck (they all but meet)
 HOOD_DEPTH = 0.24   # metres a hood lying down reaches down the back, under the neckline at the back
 HOOD_LOFT = 0.012   # metres it lies out from the garment under it
 
@@ -734,7 +734,8 @@ def _hood(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40, n_down:
     r0, base = _neck_edge(r, v, f, ang)
     back = np.clip(-np.cos(ang), 0.0, 1.0)
     depth = HOOD_DEPTH * (0.08 + 0.92 * back ** 1.5)
-    rise = 0.5 + 0.5 * back  # the hood rolls thinner towards its front edges
+    front = np.clip(np.cos(ang), 0.0, 1.0)
+    rise = (0.5 + 0.5 * back) * (1.0 - 0.85 * front ** 2)  # the hood rolls thinner to its front edges, flat where they meet
     rings = [(r0, base), (r0 + 0.01 * rise, base + 0.03 * rise), (r0 + 0.025 * rise, base + 0.04 * rise)]
     for s in np.linspace(0.0, 1.0, n_down + 1)[1:]:
         y = base + 0.04 * rise - (depth + 0.04 * rise) * s
