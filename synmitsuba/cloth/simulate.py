@@ -288,7 +288,8 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
         n = _substeps(prev[0][near], now[0][near], s)
         dt = 1.0 / collider.fps / n
         if f == 1:
-            s0.particle_qd.assign(_start_velocity(pieces, s0.particle_q.numpy(), prev[1], now[1], collider.fps))
+            s0.particle_qd.assign(s0.particle_qd.numpy() + _start_velocity(pieces, s0.particle_q.numpy(), prev[1], now[1],
+                                                                           collider.fps))
         for k in range(n):
             w = (k + 1) / n
             if f > 0:
@@ -315,8 +316,9 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
 def _start_velocity(pieces: list[ClothPiece], q: np.ndarray, held_from: np.ndarray, held_to: np.ndarray,
                     fps: float) -> np.ndarray:
     """(P, 3) float32 velocities that move each piece's particles ``q`` as its held ones move
-    from ``held_from`` to ``held_to`` in a frame (a rigid fit): a clip starts at full speed, and
-    cloth settled at rest was thrown (a circle skirt's hem to the chest in a run's first frames)."""
+    from ``held_from`` to ``held_to`` in a frame (a rigid fit; 0 for a piece that holds none),
+    added to the cloth's own when the clip starts: it starts at full speed, and cloth settled at
+    rest was thrown (a circle skirt's hem to the chest in a run's first frames)."""
     out, start = np.zeros_like(q, dtype=np.float64), 0
     for p in pieces:
         part = slice(start, start + len(p.held))
