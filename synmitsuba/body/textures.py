@@ -351,6 +351,10 @@ PALM_L, PALM_LIGHTENING, PALM_SHARE = 82.0, 0.45, 0.85  # palms and soles: L mov
 # to PALM_L (a dark skin's L 30 to 53, a light one's 70 to 75), blended in at PALM_SHARE
 
 
+NAIL_L, NAIL_SHARE = 80.0, 0.4  # nails: L moves half way to NAIL_L, at NAIL_SHARE + nail_lightening
+KNUCKLE_SHARE, CREASE_SHARE = 0.6, 0.7  # the hands' lines (``hand_skin``) at their centres
+
+
 TONGUE_LAB = (54.0, 27.0, 11.0)  # a healthy tongue's body (photographic tongue-colour studies: L* 50-58,
 # a* 24-30, b* 8-14), a little darker under darker skin, as its pigmented papillae make it
 
@@ -363,8 +367,8 @@ def tongue_lab(skin_lab) -> np.ndarray:
 
 def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
     """Skin albedo (size, size, 3) linear: the tone, darker/redder lips, lighter nails, lighter
-    palms and soles, a tongue-coloured tongue, and freckles and blush inside the face mask. Missing
-    masks skip their layer."""
+    palms and soles, the hands' knuckle pads and creases, a tongue-coloured tongue, and freckles
+    and blush inside the face mask. Missing masks skip their layer."""
     lab = p.lab()
     img = np.broadcast_to(lab_to_linear_rgb(lab).astype(np.float32), (size, size, 3)).copy()
 
@@ -390,13 +394,17 @@ def render_skin_texture(p: SkinParams, masks: dict, size: int = 512) -> np.ndarr
             spots[ys, xs] = 1.0
             spots = np.maximum(spots, np.roll(spots, 1, 0))
         img = blend(spots * masks["face"] * 0.6, lab + [-18, 6, 10])
-    for key in ("nails", "toenails"):
+    for key in ("nails", "toenails"):  # the plate over a pink bed: lighter, far more so than dark skin around it
         if key in masks:
-            img = blend(masks[key] * p.nail_lightening, lab + [15, -5, -5])
+            img = blend(masks[key] * (NAIL_SHARE + p.nail_lightening), lab + [0.5 * (NAIL_L - lab[0]), 4, -4])
     if "under_eye" in masks and p.under_eye > 0:
         img = blend(masks["under_eye"] * p.under_eye, lab + [-12, 4, -6])
     if "palms" in masks:  # palms and soles: lighter and pinker, far more so on dark skin
         img = blend(masks["palms"] * PALM_SHARE, lab + [PALM_LIGHTENING * (PALM_L - lab[0]), 3, -4])
+    if "knuckles" in masks:  # the backs' joints: darker, redder skin, darker still on dark skin
+        img = blend(masks["knuckles"] * KNUCKLE_SHARE, lab + [-6 - 0.15 * max(0.0, 60.0 - lab[0]), 5, 2])
+    if "creases" in masks:  # the skin folds: shaded, and darker in their depth
+        img = blend(masks["creases"] * CREASE_SHARE, lab + [-16, 6, 2])
     if "tongue" in masks:
         img = blend(masks["tongue"], tongue_lab(lab))
     return img.astype(np.float32)
@@ -431,8 +439,8 @@ def paint_weights(weights: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_u
     return img[..., 0]
 
 
-SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "tzone": 0.32, "lips": 0.3, "tongue": 0.2}  # oilier face and T-zone,
-# moist lips, a wet tongue
+SKIN_ROUGHNESS = {"body": 0.55, "face": 0.45, "tzone": 0.32, "lips": 0.3, "tongue": 0.2, "nails": 0.2,
+                  "toenails": 0.25}  # oilier face and T-zone, moist lips, a wet tongue, glossy nails
 
 
 def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.ndarray:
@@ -440,7 +448,7 @@ def render_skin_roughness(p: SkinParams, masks: dict, size: int = 512) -> np.nda
     pore-scale and blotch variation, so highlights break up as on real skin instead of one
     even sheen."""
     rough = np.full((size, size), SKIN_ROUGHNESS["body"], np.float32)
-    for key in ("face", "tzone", "lips", "tongue"):
+    for key in ("face", "tzone", "lips", "tongue", "nails", "toenails"):
         if key in masks:
             m = np.clip(masks[key], 0, 1).astype(np.float32)
             rough += (SKIN_ROUGHNESS[key] - rough) * m
@@ -460,3 +468,51 @@ def skin_material(p: SkinParams, masks: dict, size: int = 512, pore_repeat: tupl
     if pore_repeat is not None and p.pores > 0:
         mat = dataclasses.replace(mat, normal_map=pore_normal_map(p.seed, p.pores), normal_map_repeat=tuple(pore_repeat))
     return mat
+
+
+@dataclass
+class UVSurface:
+    """The rest surface seen through the atlas: per texel (size, size) whether a triangle covers
+    it, and its rest position and unit normal there (zero where not covered); ``texel`` the
+    median metres one texel spans."""
+
+    covered: np.ndarray
+    position: np.ndarray
+    normal: np.ndarray
+    texel: float
+
+
+def uv_surface(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray,
+               size: int) -> UVSurface:
+    """Rasterise ``faces`` into the (size, size) atlas (``uv`` v up, texel centres at i + 0.5 as
+    ``paint_uv`` draws them), interpolating rest positions and normals barycentrically, so a
+    map can be computed from where each texel lies on the body."""
+    tri = np.stack([uv[face_uv][..., 0] * size, (1.0 - uv[face_uv][..., 1]) * size], -1)  # (F, 3, 2) x, y
+    lo = np.floor(tri.min(1) - 0.5).astype(np.int64)
+    span = int(np.ceil((tri.max(1) - lo).max())) + 1
+    oy, ox = np.mgrid[0:span, 0:span]
+    px = lo[:, None, 0] + ox.ravel()[None]  # (F, span^2) candidate texels
+    py = lo[:, None, 1] + oy.ravel()[None]
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    e1, e2 = b - a, c - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    det = np.where(np.abs(det) < 1e-12, 1e-12, det)
+    qx, qy = px + 0.5 - a[:, None, 0], py + 0.5 - a[:, None, 1]
+    w1 = (qx * e2[:, None, 1] - qy * e2[:, None, 0]) / det[:, None]
+    w2 = (e1[:, None, 0] * qy - e1[:, None, 1] * qx) / det[:, None]
+    w0 = 1.0 - w1 - w2
+    inside = (w0 >= -1e-6) & (w1 >= -1e-6) & (w2 >= -1e-6) & (px >= 0) & (py >= 0) & (px < size) & (py < size)
+    f, k = np.nonzero(inside)
+    w = np.stack([w0[f, k], w1[f, k], w2[f, k]], 1)
+    pos = np.einsum("nk,nkd->nd", w, vertices[faces[f]])
+    nrm = np.einsum("nk,nkd->nd", w, normals[faces[f]])
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
+    out = UVSurface(np.zeros((size, size), bool), np.zeros((size, size, 3)), np.zeros((size, size, 3)), 0.0)
+    out.covered[py[f, k], px[f, k]] = True
+    out.position[py[f, k], px[f, k]] = pos
+    out.normal[py[f, k], px[f, k]] = nrm
+    v = vertices[faces]
+    area3 = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+    area2 = 0.5 * np.abs(det)
+    out.texel = float(np.sqrt(np.median(area3 / np.maximum(area2, 1e-12))))
+    return out
