@@ -1409,6 +1409,46 @@ def test_a_hoodie_has_a_hood_lying_down_the_back_outside_its_own_body():
     assert not (up & (np.abs(np.degrees(np.arctan2(v[:, 0] - nx, v[:, 2] - nz))) < 25)).any()
 
 
+def _neck_strip(h, kind: str, rings: int, n_seg: int = 40) -> np.ndarray:
+    """The collar's or hood's band of garment ``kind``: (rings, n_seg, 3), the last vertices
+    its shape builds before the hem (``garments._strip`` lays them ring after ring)."""
+    g = next(m for m in h.garments if m.params.kind == kind)
+    n = len(g.vertices) - g.hem[1]
+    return g.vertices[n - rings * n_seg:n].reshape(rings, n_seg, 3)
+
+
+def test_a_shirt_collars_points_reach_down_onto_the_chest():
+    """The collar's fall edge (its last ring) at the two points, either side of the opening,
+    lies 3 cm or more lower under its base than it does behind the neck, and within 1 cm of the
+    shirt's own shell there (lying on it, not standing off the neck as a funnel)."""
+    from scipy.spatial import cKDTree
+    h, _ = _dressed(["shirt", "trousers"])
+    band = _neck_strip(h, "shirt", 5)
+    r = h.regions
+    turn = np.degrees(np.arctan2(band[0, :, 0] - r.neck_xz[0], band[0, :, 2] - r.neck_xz[1]))
+    points, back = [0, -1], int(np.argmax(np.abs(turn)))
+    assert np.abs(turn[points]).max() < 35 and abs(turn[back]) > 170
+    drop = band[-1, :, 1] - band[0, :, 1]
+    assert (drop[points] < drop[back] - 0.03).all()
+    g = next(m for m in h.garments if m.params.kind == "shirt")
+    shell = g.vertices[:len(g.vertices) - g.hem[1] - band.size // 3]
+    assert (cKDTree(shell).query(band[-1, points])[0] < 0.01).all()
+
+
+def test_a_hoods_edges_meet_flat_at_the_front():
+    """The hood's two front edges (its band's first and last columns) leave the neckline
+    within 10 degrees of straight ahead, and there rise under 1 cm over their base (the hood
+    rolls 3 cm or more higher behind the neck): flat edges meeting in a V, not a cowl."""
+    h, _ = _dressed(["hoodie", "jeans"])
+    band = _neck_strip(h, "hoodie", 9)
+    r = h.regions
+    turn = np.degrees(np.arctan2(band[0, :, 0] - r.neck_xz[0], band[0, :, 2] - r.neck_xz[1]))
+    edges, back = [0, -1], int(np.argmax(np.abs(turn)))
+    assert np.abs(turn[edges]).max() < 10 and abs(turn[back]) > 170
+    rise = (band[:, :, 1] - band[0, :, 1]).max(0)
+    assert rise[edges].max() < 0.01 and rise[back] > 0.03
+
+
 def test_a_shift_is_straight_and_sleeveless_a_wrap_opens_in_a_v_and_a_jumpsuit_is_one_piece():
     """A shift: no vertex nearest an arm past the shoulder (arm_s > 0.3), its skirt's radius at
     the hem within 6 cm of its radius at the hips (an A-line of the same length flares more); a
