@@ -1417,6 +1417,16 @@ def _neck_strip(h, kind: str, rings: int, n_seg: int = 40) -> np.ndarray:
     return g.vertices[n - rings * n_seg:n].reshape(rings, n_seg, 3)
 
 
+def _ends_and_back(h, band: np.ndarray, within: float) -> int:
+    """Checks that the band's two ends leave its base within ``within`` degrees of straight
+    ahead round the neck's axis and that one column lies behind the neck; returns that column."""
+    nx, nz = h.regions.neck_xz
+    turn = np.degrees(np.arctan2(band[0, :, 0] - nx, band[0, :, 2] - nz))
+    back = int(np.argmax(np.abs(turn)))
+    assert np.abs(turn[[0, -1]]).max() < within and abs(turn[back]) > 170
+    return back
+
+
 def test_a_shirt_collars_points_reach_down_onto_the_chest():
     """The collar's fall edge (its last ring) at the two points, either side of the opening,
     lies 3 cm or more lower under its base than it does behind the neck, and within 1 cm of the
@@ -1424,10 +1434,7 @@ def test_a_shirt_collars_points_reach_down_onto_the_chest():
     from scipy.spatial import cKDTree
     h, _ = _dressed(["shirt", "trousers"])
     band = _neck_strip(h, "shirt", 5)
-    r = h.regions
-    turn = np.degrees(np.arctan2(band[0, :, 0] - r.neck_xz[0], band[0, :, 2] - r.neck_xz[1]))
-    points, back = [0, -1], int(np.argmax(np.abs(turn)))
-    assert np.abs(turn[points]).max() < 35 and abs(turn[back]) > 170
+    points, back = [0, -1], _ends_and_back(h, band, 35)
     drop = band[-1, :, 1] - band[0, :, 1]
     assert (drop[points] < drop[back] - 0.03).all()
     g = next(m for m in h.garments if m.params.kind == "shirt")
@@ -1441,10 +1448,7 @@ def test_a_hoods_edges_meet_flat_at_the_front():
     rolls 3 cm or more higher behind the neck): flat edges meeting in a V, not a cowl."""
     h, _ = _dressed(["hoodie", "jeans"])
     band = _neck_strip(h, "hoodie", 9)
-    r = h.regions
-    turn = np.degrees(np.arctan2(band[0, :, 0] - r.neck_xz[0], band[0, :, 2] - r.neck_xz[1]))
-    edges, back = [0, -1], int(np.argmax(np.abs(turn)))
-    assert np.abs(turn[edges]).max() < 10 and abs(turn[back]) > 170
+    edges, back = [0, -1], _ends_and_back(h, band, 10)
     rise = (band[:, :, 1] - band[0, :, 1]).max(0)
     assert rise[edges].max() < 0.01 and rise[back] > 0.03
 
