@@ -43,12 +43,11 @@ def _toes(human, shoe_rest: np.ndarray) -> np.ndarray:
 def measure(seed: int, motion: str, seconds: float, stride: int) -> dict:
     import synmitsuba as sm
     from reference import winding_numbers
-    from synmitsuba.compose.subjects import clip_bounds, with_heels
+    from synmitsuba.compose.subjects import clip_bounds
     outfit = ["tshirt", "skirt", "heels"] if seed % 2 else ["dress", "heels"]
     recipe = sm.sample_subject(np.random.default_rng(seed), {"outfit": outfit, "jacket": False, "texture_size": 64})
     human = sm.build_subject(recipe)
-    clip = with_heels(sm.retarget(sm.procedural_motion(motion, np.random.default_rng(seed), seconds=seconds),
-                                  human.skeleton), human.heels)
+    clip = sm.retarget_to_subject(sm.procedural_motion(motion, np.random.default_rng(seed), seconds=seconds), human)
     _, _, lift = clip_bounds(human, clip)
     part = next(p for p in human.parts if p.name == "heels")
     block = part.rest[:, 1] < -1e-6

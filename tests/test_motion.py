@@ -234,6 +234,35 @@ def test_feet_stay_planted(kind, limit):
         assert sm.foot_sliding(m) < limit, (kind, seed)
 
 
+@pytest.mark.parametrize("kind", ["walk", "jog", "run"])
+def test_feet_roll_from_the_heel_over_the_ball(kind):
+    """A step lands on the heel, toe up; the foot comes down flat and pushes off over the ball,
+    heel up, the toes flat on the ground. While a foot comes down its heel's contact point holds
+    still; while its heel rises its toes' tip does. No sole point is ever under the ground, and
+    in a walk one is on it at every frame."""
+    for seed in range(2):
+        m = sm.procedural_motion(kind, np.random.default_rng(seed), seconds=2.0, fps=60)
+        sk, P, G = m.skeleton, m.joint_positions(), m.global_rotations()
+        lowest = np.full(m.n_frames, np.inf)
+        for s in "lr":
+            a, ball, tip = (sk.index(f"{s}_{j}") for j in ("ankle", "toe", "toe_end"))
+            pitch = np.degrees(np.arcsin(G[:, a, 1, 2]))  # the foot's long axis (z) against the ground
+            heel = P[:, a] + G[:, a] @ np.array([0.0, -0.085, -0.055])  # under and behind the ankle
+            under_ball = P[:, ball] + G[:, a] @ np.array([0.0, -0.02, 0.0])
+            toes_flat = np.abs(G[:, ball, 1, 2]) < 1e-9
+            assert pitch.max() > {"walk": 10, "jog": 5, "run": 2}[kind] and pitch.min() < -20, (kind, seed, s)
+            landing = 3 if kind == "walk" else 0  # a run lands nearer the midfoot, for a frame or none at 60 fps
+            for point, when, frames in ((heel, (pitch > 1) & (heel[:, 1] < 1e-6), landing),
+                                        (P[:, tip], (pitch < -1) & (P[:, tip, 1] < 1e-6) & toes_flat, 3)):
+                both = when[1:] & when[:-1]
+                assert both.sum() >= frames, (kind, seed, s)
+                assert np.abs(np.diff(point, axis=0)[both]).max(initial=0.0) < 1e-3, (kind, seed, s)
+            lowest = np.minimum(lowest, np.min([heel[:, 1], under_ball[:, 1], P[:, tip, 1]], axis=0))
+        assert lowest.min() > -1e-6
+        if kind == "walk":
+            assert lowest.max() < 1e-6
+
+
 def test_walk_parameters_change_the_motion():
     base = dict(speed=1.2, stride=1.4, amplitude=1.0, style="normal")
     ref = sm.procedural_motion("walk", np.random.default_rng(0), **base)
@@ -363,22 +392,18 @@ def test_pose_between_frames_is_the_slerp_of_its_neighbours():
 
 @pytest.mark.parametrize("kind", ["idle", "walk", "run"])
 def test_retargeted_feet_pitch_as_the_source_feet_do_from_their_flat_rests(kind):
-    """Both rest poses stand flat-footed: anny's ankle-to-middle-toe line is as far from its rest
-    slope at every frame as the humanoid source's ankle-to-toe line is from its own (their rest
-    slopes differ, 19 against 26.6 degrees, which the T-pose must not turn into a toe-down tilt)."""
+    """Both rest poses stand flat-footed: anny's feet and toes turn from their rests at every
+    frame exactly as the humanoid source's do from its own (their ankle-to-toe slopes differ, 19
+    against 26.6 degrees, which the T-pose must not turn into a toe-down tilt), and each of the
+    five toes bends as the source's one toe joint does."""
     from synmitsuba.body.anny_model import anny_body
     src = sm.procedural_motion(kind, np.random.default_rng(2), seconds=1.0)
     anny = anny_body().skeleton
     out = sm.retarget(src, anny)
-
-    def pitch(motion, a, b):
-        p = motion.joint_positions()
-        rest = motion.skeleton.rest_positions
-        i, j = motion.skeleton.index(a), motion.skeleton.index(b)
-        slope = [np.degrees(np.arctan2(-d[..., 1], np.hypot(d[..., 0], d[..., 2])))
-                 for d in (p[:, j] - p[:, i], rest[j] - rest[i])]
-        return slope[0] - slope[1]
+    Gs, Gt = src.global_rotations(), out.global_rotations()
     for s in ("l", "r"):
         side = "L" if s == "l" else "R"
-        np.testing.assert_allclose(pitch(out, f"foot.{side}", f"toe3-1.{side}"),
-                                   pitch(src, f"{s}_ankle", f"{s}_toe"), atol=0.05)
+        np.testing.assert_allclose(Gt[:, anny.index(f"foot.{side}")], Gs[:, src.skeleton.index(f"{s}_ankle")], atol=1e-9)
+        for k in range(1, 6):
+            np.testing.assert_allclose(Gt[:, anny.index(f"toe{k}-1.{side}")], Gs[:, src.skeleton.index(f"{s}_toe")],
+                                       atol=1e-9)

@@ -82,15 +82,13 @@ def test_at_rest_every_shoe_vertex_is_outside_the_foot_and_the_forefoot_inside_t
 @pytest.mark.parametrize("motion", ["walk", "run"])
 def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, kind="sneakers"):
     """Placed as composition places a clip (its lowest point over the clip on the ground), the
-    lowest sole point is never under the ground; in a walk (one foot always planted) it is on
-    it (under 3 mm) in most frames and within 1.5 cm in all (the walk plants the lowest joint,
-    and a rigid sole rocks on its heel or toe as the foot rolls); the forefoot never leaves
-    its shoe."""
+    lowest sole point is never under the ground; in a walk (one foot always planted, rolling
+    from the heel to the ball) it is on it at every frame (the clip is planted on the shoes'
+    soles: with the source's root height it floated 3-6 mm in most frames, 11-23 mm at worst);
+    the forefoot never leaves its shoe."""
     from synmitsuba.compose.subjects import clip_bounds
-    from synmitsuba.compose.subjects import with_heels
     h = _subject(kind)
-    clip = with_heels(sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h.skeleton),
-                      h.heels)
+    clip = sm.retarget_to_subject(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h)
     _, _, lift = clip_bounds(h, clip)
     shoe = _shoe(h)
     front = [ids[_covered(h.body.vertices[ids], kind)] for ids in (_foot(h, 1.0), _foot(h, -1.0))]
@@ -105,7 +103,7 @@ def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, k
     lowest = np.array(lowest)
     assert lowest.min() >= -1e-9
     if motion == "walk":
-        assert np.median(lowest) < 0.003 and lowest.max() < 0.015, lowest
+        assert lowest.max() < 5e-4, lowest
 
 
 def test_styles_are_drawn_with_the_outfit_boots_never_under_trousers_heels_under_skirts():

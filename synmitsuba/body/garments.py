@@ -787,9 +787,10 @@ def _rigid_feet(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.
     return ((1 - t) * foot + t * weights).astype(weights.dtype)
 
 
-def _heeled_feet(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Heels: rigid on the feet, but in front of the ball a shoe follows the toes (which the
-    heel's pitch turns back flat on the insole), blended over 3 cm across the ball line."""
+def _flexing_feet(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Shoes are rigid on the feet behind the ball and follow the toes in front of it, blended
+    over 3 cm across the ball line: a sole bends there as the heel rises in a step (and a heel's
+    pitch turns the toes back flat on its insole)."""
     out = _rigid_feet(body, r, v, weights)
     for side in (1.0, -1.0):
         pitch = heel_pitch(body.skeleton, foot_points(body, r, side), side, 0.05)  # only its ball line
@@ -838,8 +839,8 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell+collar": GarmentShape(_shell_and(_collar)),
     "shell+hood": GarmentShape(_shell_and(_hood)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
-    "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_rigid_feet, sole=True),
-    "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_heeled_feet, sole=True),  # the toes bend at the ball
+    "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_flexing_feet, sole=True),  # the toes bend at the ball
+    "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_flexing_feet, sole=True),
 }
 
 

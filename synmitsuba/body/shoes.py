@@ -396,7 +396,7 @@ def heel_pitch(skeleton, points: np.ndarray, side: float, height: float) -> Heel
     rot = _axis_rotation(axis, angle)
     if ((back - pivot) @ rot.T)[1] < (back - pivot)[1]:  # the heel must go up
         rot = rot.T
-    mid = skeleton.rest_positions[toes[2]]  # the toe a shoe's front follows (``garments._heeled_feet``)
+    mid = skeleton.rest_positions[toes[2]]  # the toe a shoe's front follows (``garments._flexing_feet``)
     drop = float(mid[1] - ((mid - pivot) @ rot.T + pivot)[1])
     return HeelPitch(flat.foot, toes, rot, pivot, ball, height, drop)
 

@@ -24,6 +24,7 @@ from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
 from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
+from synmitsuba.body.skeleton import forward_kinematics
 from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.hand_skin import hand_lines
@@ -326,6 +327,29 @@ class LayeredHuman:
         the ground (up by the balls' drop; zero in flat shoes)."""
         rot = pitch_feet(np.broadcast_to(np.eye(3), (len(self.skeleton), 3, 3)), self.heels)
         return rot, np.array([0.0, max((h.drop for h in self.heels), default=0.0), 0.0])
+
+    def sole_heights(self, rotations: np.ndarray, root_translation: np.ndarray) -> np.ndarray:
+        """The lowest point of what the subject stands on (its shoes, or its feet) at each of F
+        frames (local ``rotations`` (F, J, 3, 3), ``root_translation`` (F, 3)): only those
+        vertices are skinned, so a clip's contact is found without posing everything."""
+        vertices, weights = self._soles
+        G, P = forward_kinematics(self.skeleton, rotations, root_translation)
+        b = P[..., 1] - np.einsum("fjc,jc->fj", G[:, :, 1, :], self.skeleton.rest_positions)
+        y = ((weights @ G[:, :, 1, :]) * vertices).sum(-1) + b @ weights.T
+        return y.min(1)
+
+    @functools.cached_property
+    def _soles(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rest vertices and dense weights of the shoes, or of the bare feet (within 5 cm of the
+        lowest body point)."""
+        def dense(w):
+            return np.asarray(w.todense() if hasattr(w, "todense") else w)
+        shoes = [p for p in self.parts if p.name in GARMENTS and GARMENTS[p.name].footwear]
+        if shoes:
+            return shoes[0].rest, dense(shoes[0].skinning_weights)
+        body = self.parts[0]
+        low = body.rest[:, 1] < body.rest[:, 1].min() + 0.05
+        return body.rest[low], dense(body.skinning_weights[low])
 
     def _transforms(self, rotations, root_translation):
         if rotations is not None:

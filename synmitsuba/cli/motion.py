@@ -31,7 +31,7 @@ def _figure_scene(motion, f: int, human=None, cloth=None):
 def preview(args) -> int:
     import synmitsuba as sm
     from synmitsuba.motion.sources import check_motion_source, load_motion
-    from synmitsuba.compose.subjects import with_heels
+    from synmitsuba.compose.subjects import retarget_to_subject
     from synmitsuba.body.recipe import SubjectConfig
     check_motion_source(args.clip, field="CLIP")  # before anything heavy
     try:
@@ -46,7 +46,7 @@ def preview(args) -> int:
     human, rows = None, [None]
     if not args.stick:
         human = sm.build_subject(sm.sample_subject(rng, config))
-        motion = with_heels(sm.retarget(motion, human.skeleton), human.heels)
+        motion = retarget_to_subject(motion, human)
         simulated = sm.simulate_cloth(human, motion) if args.cloth != "skinned" else None
         rows = {"skinned": [None], "simulated": [simulated], "both": [None, simulated]}[args.cloth]
     frames = np.linspace(0, motion.n_frames - 1, args.frames).round().astype(int)

@@ -6,7 +6,8 @@ from synmitsuba._lazy import lazy_exports
 _EXPORTS = {"load_scene_file": "synmitsuba.compose.scenefile_spec", "SceneFile": "synmitsuba.compose.scenefile",
             "scene_spec": "synmitsuba.compose.scenefile_spec",
             "add_subjects": "synmitsuba.compose.subjects", "SubjectEntry": "synmitsuba.compose.subjects",
-            "PlacedSubject": "synmitsuba.compose.subjects", "compose_scene": "synmitsuba.compose.composition",
+            "PlacedSubject": "synmitsuba.compose.subjects", "retarget_to_subject": "synmitsuba.compose.subjects",
+            "compose_scene": "synmitsuba.compose.composition",
             "ComposeConfig": "synmitsuba.compose.composition", "SceneSpec": "synmitsuba.compose.spec",
             "load_environment": "synmitsuba.compose.environments",
             "environment_names": "synmitsuba.compose.environments"}

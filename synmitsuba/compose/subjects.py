@@ -180,9 +180,29 @@ def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) ->
 
 
 def retargeted_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> Motion:
-    """The subject's clip on its skeleton, its feet held as its shoes hold them."""
+    """The subject's clip on its skeleton (``retarget_to_subject``)."""
+    return retarget_to_subject(motion.clip(where), human)
+
+
+def retarget_to_subject(source: Motion, human: LayeredHuman) -> Motion:
+    """``source`` on the subject's skeleton, its feet held as its shoes hold them and planted."""
     from synmitsuba.motion.retargeting import retarget
-    return with_heels(retarget(motion.clip(where), human.skeleton), human.heels)
+    return planted(with_heels(retarget(source, human.skeleton), human.heels), human, source)
+
+
+def planted(clip: Motion, human: LayeredHuman, source: Motion) -> Motion:
+    """The clip with its root moved up or down at each frame so that the subject's lowest sole
+    point is as high as the source's (scaled as retargeting scales the root): a foot the source
+    stands on stands on the ground, whatever the new legs' and feet's lengths. Sources on the
+    procedural humanoid only, whose soles are known (``humanoid.sole_clearance``); others as
+    they are (``clip_bounds`` then lifts the whole clip onto the ground)."""
+    from synmitsuba.motion.humanoid import humanoid_skeleton, sole_clearance
+    if source.skeleton.names != humanoid_skeleton().names or clip.skeleton.names == source.skeleton.names:
+        return clip
+    wanted = clip.meta.get("pelvis_ratio", 1.0) * sole_clearance(source.rotations, source.root_translation)
+    root = clip.root_translation.copy()
+    root[:, 1] += wanted - human.sole_heights(clip.rotations, root)
+    return replace(clip, root_translation=root)
 
 
 def with_heels(motion: Motion, heels) -> Motion:
@@ -254,8 +274,8 @@ HAND_STREAM, FACE_STREAM = 7, 8  # the streams a subject's hands and face are dr
 def clip_bounds(human: LayeredHuman, clip: Motion) -> tuple[list, float, float]:
     """The per-frame ground hulls of the subject's (retargeted, performed) clip centred on its
     mean root position, its tallest point over the clip and the lift that puts its lowest point
-    over the clip on the ground (retargeting keeps the source's root height, not the new legs'
-    contact)."""
+    over the clip on the ground (``planted`` puts a procedural clip's soles on it already; a
+    mocap clip keeps its source's root height, not the new legs' contact)."""
     clip = place_motion(clip, (0.0, 0.0), 0.0)
     xz, height, low = [], -np.inf, np.inf
     for f in range(clip.n_frames):

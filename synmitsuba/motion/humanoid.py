@@ -33,3 +33,20 @@ def humanoid_skeleton() -> Skeleton:
 
 
 FEET = {"left": ("l_ankle", "l_toe", "l_toe_end"), "right": ("r_ankle", "r_toe", "r_toe_end")}
+HEEL_BACK = 0.055  # metres: the heel's contact point behind the ankle, on the ground
+
+
+def sole_clearance(rotations: np.ndarray, root_translation: np.ndarray) -> np.ndarray:
+    """The humanoid's lowest sole point per frame (F,): of each heel's contact point, the sole
+    under each ball (both rigid with the foot) and each toe's tip. 0 when a foot stands."""
+    from synmitsuba.body.skeleton import forward_kinematics
+    sk = humanoid_skeleton()
+    G, P = forward_kinematics(sk, rotations, root_translation)
+    low = []
+    for a, toe, tip in FEET.values():
+        i, j, k = sk.index(a), sk.index(toe), sk.index(tip)
+        rest = sk.rest_positions
+        heel = P[:, i] + G[:, i] @ np.array([0.0, -rest[i, 1], -HEEL_BACK])
+        ball = P[:, j] + G[:, i] @ np.array([0.0, -rest[j, 1], 0.0])
+        low.append(np.minimum(np.minimum(heel[:, 1], ball[:, 1]), P[:, k, 1]))
+    return np.minimum(*low)

@@ -84,6 +84,17 @@ def finger_pairs(source_names, target_names) -> dict[str, str]:
             if anny.startswith("finger") and not smplx.endswith("_hand") and smplx in src and anny in tgt}
 
 
+# anny toes that bend with the one the canonical names map (the middle toe's first bone is the
+# canonical toe): every source has one toe joint, at the ball, and a foot bends there as a whole
+_ANNY_TOES = {f"toe{k}-1.{S}": f"toe3-1.{S}" for k in (1, 2, 4, 5) for S in "LR"}
+
+
+def toe_followers(target_names) -> dict[str, str]:
+    """{target toe bone: the target toe bone whose source joint it takes too}."""
+    names = set(target_names)
+    return {t: m for t, m in _ANNY_TOES.items() if t in names and m in names}
+
+
 def body_model_to_anny(names) -> dict[str, str]:
     """{SMPL / SMPL-X joint name: anny bone} for every joint with a counterpart: the body through
     the canonical names (as retargeting maps them), hands and eyes through their own table."""

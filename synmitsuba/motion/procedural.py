@@ -6,11 +6,13 @@ supporting foot stays put on the ground (y = 0) and the lowest foot touches it.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from synmitsuba.body.skeleton import forward_kinematics
 from synmitsuba.errors import ConfigError
-from synmitsuba.motion.humanoid import FEET, humanoid_skeleton
+from synmitsuba.motion.humanoid import FEET, HEEL_BACK, humanoid_skeleton
 from synmitsuba.motion.motion import Motion
 from synmitsuba.schema import Choice, Number, mapping
 from synmitsuba.geometry import axis_rotation
@@ -95,9 +97,49 @@ def _foot_track(t, f: float, offset: float, beta: float, step, lift: float):
     return along, height
 
 
-def _leg_ik(p: _Pose, side: str, hip, ankle) -> None:
-    """Two-bone IK: rotate hip and knee so the ankle reaches ``ankle`` (F, 3) from ``hip``;
-    the foot stays flat (global rotation identity). Assumes the pelvis is not rotated."""
+# kind -> the foot's pitch against the ground at heel strike (toe up) and at toe-off (heel up),
+# and where in the stance the foot lands flat and where its heel starts to rise (fractions of
+# the stance). Walking lands on the heel; running lands nearer the midfoot and pushes off longer.
+ROLL = {"walk": (D(15), D(35), 0.17, 0.55), "jog": (D(8), D(30), 0.12, 0.45), "run": (D(4), D(30), 0.10, 0.40)}
+
+
+def _smooth(x):
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3 - 2 * x)
+
+
+@dataclass(frozen=True)
+class FootRoll:
+    """A foot's roll over its gait cycle (arrays over frames): ``pitch`` the foot's (radians, toe
+    up > 0), ``ball`` how far its pivot is from the heel's contact point (0) to the ball joint
+    (1), ``toes`` the toes' own pitch against the ground (flat on it while the heel rises)."""
+
+    pitch: np.ndarray
+    ball: np.ndarray
+    toes: np.ndarray
+
+
+def foot_roll(u, beta: float, roll: tuple) -> FootRoll:
+    """The roll at cycle phases ``u`` in [0, 1) (stance first, a fraction ``beta`` of the cycle):
+    down from the heel to flat, flat, up over the ball to toe-off, and through the swing back to
+    the heel-strike pitch (the pivot moving from the ball to the heel as the foot is in the air)."""
+    strike, push, flat, rise = roll
+    q = u / beta
+    s = (u - beta) / (1 - beta)
+    stance = u < beta
+    pitch = np.where(q < flat, strike * (1 - _smooth(q / flat)),
+                     np.where(q < rise, 0.0, -push * ((q - rise) / (1 - rise)) ** 2))
+    swing_pitch = -push + (push + strike) * _smooth(s / 0.75)
+    pitch = np.where(stance, pitch, swing_pitch)
+    ball = np.where(stance, (q >= flat).astype(float), 1 - _smooth((s - 0.2) / 0.6))
+    toes = np.where(stance, np.where(q < flat, pitch, 0.0), swing_pitch * _smooth(s / 0.4))
+    return FootRoll(pitch, ball, toes)
+
+
+def _leg_ik(p: _Pose, side: str, hip, ankle, foot=None) -> None:
+    """Two-bone IK: rotate hip and knee so the ankle reaches ``ankle`` (F, 3) from ``hip``; the
+    foot takes the global rotation ``foot`` (F, 3, 3; flat, the identity, when None). Assumes
+    the pelvis is not rotated."""
     sk = p.skel
     s = side[0]
     ih, ik, ia = sk.index(f"{s}_hip"), sk.index(f"{s}_knee"), sk.index(f"{s}_ankle")
@@ -113,6 +155,18 @@ def _leg_ik(p: _Pose, side: str, hip, ankle) -> None:
     p.R[:, ih] = axis_rotation("z", phi) @ axis_rotation("x", -(gamma + alpha))
     p.R[:, ik] = axis_rotation("x", knee)
     p.R[:, ia] = np.swapaxes(p.R[:, ih] @ p.R[:, ik], -1, -2)
+    if foot is not None:
+        p.R[:, ia] = p.R[:, ia] @ foot
+
+
+def _rolled_ankle(sk, side: str, flat, roll: FootRoll) -> np.ndarray:
+    """Where the ankle is when the foot, placed flat with its ankle at ``flat`` (F, 3), is turned
+    by ``roll.pitch`` about its pivot (the heel's contact point or the ball joint)."""
+    ankle = sk.rest_positions[sk.index(f"{side[0]}_ankle")]
+    heel = ankle + [0.0, -ankle[1], -HEEL_BACK]
+    pivot = heel + roll.ball[:, None] * (sk.rest_positions[sk.index(f"{side[0]}_toe")] - heel)
+    turn = axis_rotation("x", -roll.pitch)
+    return pivot + (flat - ankle) + np.einsum("fij,fj->fi", turn, ankle - pivot)
 
 
 def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.ndarray:
@@ -127,11 +181,14 @@ def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.nda
     sk = p.skel
     pelvis = np.zeros((n, 3))
     pelvis += (speed * t)[:, None] * direction
-    ankles, hips, reach = {}, {}, []
+    ankles, hips, reach, rolls = {}, {}, [], {}
     for side, offset in (("left", 0.0), ("right", 0.5)):
         along, height = _foot_track(t, f, offset, beta, direction, lift * (0.6 if lateral else style))
         ankle = sk.rest_positions[sk.index(f"{side[0]}_ankle")] + (speed * along)[:, None] * direction
         ankle[:, 1] += height
+        if not lateral:  # a side step keeps its feet flat
+            rolls[side] = foot_roll(np.mod(f * t + offset, 1.0), beta, tuple(np.multiply(ROLL[kind], (style, style, 1, 1))))
+            ankle = _rolled_ankle(sk, side, ankle, rolls[side])
         hip_off = sk.offsets[sk.index(f"{side[0]}_hip")]
         leg = 0.97 * (np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_knee")])
                       + np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_ankle")]))
@@ -144,7 +201,11 @@ def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.nda
     y_smooth = np.convolve(np.pad(y, 4, mode="edge"), kernel / kernel.sum(), mode="valid")
     pelvis[:, 1] = np.minimum(y, y_smooth)
     for side in ("left", "right"):
-        _leg_ik(p, side, pelvis + hips[side], ankles[side])
+        roll = rolls.get(side)
+        _leg_ik(p, side, pelvis + hips[side], ankles[side], None if roll is None else axis_rotation("x", -roll.pitch))
+        if roll is not None:  # the toes' pitch against the ground, under the foot's
+            toe = sk.index(f"{side[0]}_toe")
+            p.R[:, toe] = axis_rotation("x", roll.pitch) @ axis_rotation("x", -roll.toes)
     phase = 2 * np.pi * f * t
     _arms_down(p, elbow=elbow)
     arm = a["amplitude"] * D(22) * style * (0.3 if lateral else 1.0)

@@ -10,7 +10,8 @@ target whose rest pose is the T-pose, as in our Skeleton convention), and otherw
 that keeps bone directions equal between source and target. Root translation is scaled by the
 ratio of pelvis heights, T(t) = H_pelvis / H_pelvis_src * T_src(t). A SMPL-X source (AMASS)
 also hands its 30 finger joints to anny's finger bones (``names.finger_pairs``), rest to rest;
-``meta["fingers"]`` says whether it moved any, so drawn hand behaviours leave them alone.
+``meta["fingers"]`` says whether it moved any, so drawn hand behaviours leave them alone. Every
+source's toe joint (at the ball) turns all five of anny's toes (``names.toe_followers``).
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import align_vectors
 from synmitsuba.motion.humanoid import humanoid_skeleton
 from synmitsuba.motion.motion import Motion
-from synmitsuba.motion.names import BONE_CHILD, canonical_map, finger_pairs
+from synmitsuba.motion.names import BONE_CHILD, canonical_map, finger_pairs, toe_followers
 
 
 def _descendant(sk: Skeleton, i: int, j: int) -> bool:
@@ -103,6 +104,8 @@ def _pairs(src: Skeleton, tgt: Skeleton, name_map: dict | None) -> dict[int, int
         raise ConfigError("name_map", None, "could not match the skeletons' joint names (found "
                           f"{len(pairs)} pairs); pass name_map={{source joint: target joint}}")
     pairs.update({tgt.index(t): src.index(s) for t, s in finger_pairs(src.names, tgt.names).items()})
+    pairs.update({tgt.index(t): pairs[tgt.index(m)] for t, m in toe_followers(tgt.names).items()
+                  if tgt.index(m) in pairs})
     return pairs
 
 
