@@ -85,7 +85,9 @@ def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, k
     lowest sole point is never under the ground; in a walk (one foot always planted, rolling
     from the heel to the ball) it is on it at every frame (the clip is planted on the shoes'
     soles: with the source's root height it floated 3-6 mm in most frames, 11-23 mm at worst);
-    the forefoot never leaves its shoe."""
+    a sole point on the ground moves under 4 mm a frame while it stays there in a walk, 8 mm in
+    a run (5.5-11 and 11-19 mm on the source's root path, whose stride is the humanoid's); the
+    forefoot never leaves its shoe."""
     from synmitsuba.compose.subjects import clip_bounds
     h = _subject(kind)
     clip = sm.retarget_to_subject(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h)
@@ -93,17 +95,22 @@ def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, k
     shoe = _shoe(h)
     front = [ids[_covered(h.body.vertices[ids], kind)] for ids in (_foot(h, 1.0), _foot(h, -1.0))]
     rows = np.isin(h.split.source, np.concatenate(front))  # the body layer is the seam-split render mesh
-    lowest = []
+    lowest, slide, before = [], [0.0], None
     for f in range(clip.n_frames):
         layers = {lay.name: lay for lay in h.pose(*clip.frame(f))}
         v = layers[shoe.name].vertices
         lowest.append(v[:, 1].min() + lift)
+        if before is not None:
+            down = (v[:, 1] + lift < 0.002) & (before[:, 1] + lift < 0.002)
+            slide.append(np.linalg.norm((v - before)[down][:, [0, 2]], axis=1).max(initial=0.0))
+        before = v
         inside = winding_numbers(v, layers[shoe.name].faces, layers["body"].vertices[rows])
         assert inside.min() > 0.5, (f, inside.min())
     lowest = np.array(lowest)
     assert lowest.min() >= -1e-9
     if motion == "walk":
         assert lowest.max() < 5e-4, lowest
+    assert max(slide) < (0.004 if motion == "walk" else 0.008), slide  # a run: 11-19 mm without
 
 
 def test_styles_are_drawn_with_the_outfit_boots_never_under_trousers_heels_under_skirts():

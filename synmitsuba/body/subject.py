@@ -328,28 +328,31 @@ class LayeredHuman:
         rot = pitch_feet(np.broadcast_to(np.eye(3), (len(self.skeleton), 3, 3)), self.heels)
         return rot, np.array([0.0, max((h.drop for h in self.heels), default=0.0), 0.0])
 
-    def sole_heights(self, rotations: np.ndarray, root_translation: np.ndarray) -> np.ndarray:
-        """The lowest point of what the subject stands on (its shoes, or its feet) at each of F
-        frames (local ``rotations`` (F, J, 3, 3), ``root_translation`` (F, 3)): only those
-        vertices are skinned, so a clip's contact is found without posing everything."""
+    def sole_points(self, rotations: np.ndarray, root_translation: np.ndarray) -> np.ndarray:
+        """What the subject stands on (its shoes, or its feet's lowest 5 cm) posed at each of F
+        frames (local ``rotations`` (F, J, 3, 3), ``root_translation`` (F, 3)): (F, V, 3). Only
+        those vertices are skinned, so a clip's contact is found without posing everything;
+        ``sole_sides`` says each one's foot."""
         vertices, weights = self._soles
         G, P = forward_kinematics(self.skeleton, rotations, root_translation)
-        b = P[..., 1] - np.einsum("fjc,jc->fj", G[:, :, 1, :], self.skeleton.rest_positions)
-        y = ((weights @ G[:, :, 1, :]) * vertices).sum(-1) + b @ weights.T
-        return y.min(1)
+        b = P - np.einsum("fjab,jb->fja", G, self.skeleton.rest_positions)
+        return np.stack([skin(vertices, weights, (G[f], b[f])) for f in range(len(G))])
+
+    @property
+    def sole_sides(self) -> np.ndarray:
+        """+1 for the left foot's sole points (anny's left is +x), -1 for the right's."""
+        return np.where(self._soles[0][:, 0] > 0, 1, -1)
 
     @functools.cached_property
-    def _soles(self) -> tuple[np.ndarray, np.ndarray]:
-        """Rest vertices and dense weights of the shoes, or of the bare feet (within 5 cm of the
-        lowest body point)."""
-        def dense(w):
-            return np.asarray(w.todense() if hasattr(w, "todense") else w)
+    def _soles(self) -> tuple[np.ndarray, Any]:
+        """Rest vertices and skinning weights of the shoes, or of the bare feet (within 5 cm of
+        the lowest body point)."""
         shoes = [p for p in self.parts if p.name in GARMENTS and GARMENTS[p.name].footwear]
         if shoes:
-            return shoes[0].rest, dense(shoes[0].skinning_weights)
+            return shoes[0].rest, shoes[0].skinning_weights
         body = self.parts[0]
         low = body.rest[:, 1] < body.rest[:, 1].min() + 0.05
-        return body.rest[low], dense(body.skinning_weights[low])
+        return body.rest[low], body.skinning_weights[low]
 
     def _transforms(self, rotations, root_translation):
         if rotations is not None:

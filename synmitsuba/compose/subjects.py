@@ -191,18 +191,40 @@ def retarget_to_subject(source: Motion, human: LayeredHuman) -> Motion:
 
 
 def planted(clip: Motion, human: LayeredHuman, source: Motion) -> Motion:
-    """The clip with its root moved up or down at each frame so that the subject's lowest sole
-    point is as high as the source's (scaled as retargeting scales the root): a foot the source
-    stands on stands on the ground, whatever the new legs' and feet's lengths. Sources on the
-    procedural humanoid only, whose soles are known (``humanoid.sole_clearance``); others as
+    """The clip with its root moved at each frame so that the subject's feet stand where the
+    source's do, whatever the new legs' and feet's lengths: up or down until its lowest sole
+    point is as high as the source's (scaled as retargeting scales the root), and across so that
+    the sole points on the ground hold still while they are on it (``held_still``). Sources on
+    the procedural humanoid only, whose soles are known (``humanoid.sole_clearance``); others as
     they are (``clip_bounds`` then lifts the whole clip onto the ground)."""
     from synmitsuba.motion.humanoid import humanoid_skeleton, sole_clearance
     if source.skeleton.names != humanoid_skeleton().names or clip.skeleton.names == source.skeleton.names:
         return clip
     wanted = clip.meta.get("pelvis_ratio", 1.0) * sole_clearance(source.rotations, source.root_translation)
     root = clip.root_translation.copy()
-    root[:, 1] += wanted - human.sole_heights(clip.rotations, root)
+    points = human.sole_points(clip.rotations, root)
+    rise = wanted - points[..., 1].min(1)
+    root[:, 1] += rise
+    root[:, [0, 2]] += held_still(points[..., [0, 2]], points[..., 1] + rise[:, None], human.sole_sides)
     return replace(clip, root_translation=root)
+
+
+def held_still(xz: np.ndarray, y: np.ndarray, sides: np.ndarray, touch: float = 0.002) -> np.ndarray:
+    """Root offsets (F, 2) that keep the sole points on the ground (``y`` under ``touch``) from
+    sliding: at each frame, the mean move since the frame before of the points on the ground at
+    both, on the foot with more of them, is taken back (and kept: the clip goes as far as its
+    feet carry it). ``xz`` (F, V, 2) and ``y`` (F, V) are the points' ground positions and
+    heights; ``sides`` (V,) their feet."""
+    off = np.zeros((len(xz), 2))
+    for t in range(1, len(xz)):
+        off[t] = off[t - 1]
+        down = (y[t] < touch) & (y[t - 1] < touch)
+        counts = {s: int((down & (sides == s)).sum()) for s in (1, -1)}
+        side = max(counts, key=lambda s: counts[s])
+        if counts[side]:
+            held = down & (sides == side)
+            off[t] -= (xz[t, held] - xz[t - 1, held]).mean(0)
+    return off
 
 
 def with_heels(motion: Motion, heels) -> Motion:
