@@ -2,7 +2,8 @@
 
 Every kind takes ``rng`` (unset parameters are sampled from plausible ranges, so the same rng
 gives the same motion), ``seconds`` and ``fps``. Feet are planted: the root is moved so the
-supporting foot stays put on the ground (y = 0) and the lowest foot touches it.
+supporting foot stays put on the ground (y = 0) and the lowest foot touches it. Walks, jogs and
+runs roll each foot from the heel over the ball (``foot_roll``).
 """
 from __future__ import annotations
 
