@@ -8,9 +8,11 @@ Per clip, from the fully posed shoe layer (or the body's lowest 5 cm barefoot), 
 planting's own sole points: the lowest sole point per frame (median and worst: how far the
 planted foot floats), the worst move in a frame of a sole point on the ground at both ends of it
 (how far a planted foot slides), the feet's pitch range (heel strike to toe-off), and the
-seconds each way takes. Prints JSON.
+seconds each way takes. ``--mocap``: the same clips with their joints named as a CMU BVH's, so
+retargeting takes them for mocap, whose soles are estimated from the ankles and toes
+(``motion.contacts``). Prints JSON.
 
-    python bench/feet.py [--subjects 4] [--motions walk,jog,run] [--seconds 1.0] [--source-root-only]
+    python bench/feet.py [--subjects 4] [--motions walk,jog,run] [--seconds 1.0] [--source-root-only] [--mocap]
 """
 from __future__ import annotations
 
@@ -48,6 +50,16 @@ def _soles(human, clip) -> np.ndarray:
     return np.stack(out) + [0.0, lift, 0.0]
 
 
+def as_mocap(source):
+    """``source`` with its joints named as a CMU BVH names them (the same skeleton and frames)."""
+    from dataclasses import replace
+    from synmitsuba.body.skeleton import Skeleton
+    from synmitsuba.motion.names import FAMILIES
+    named = {canon: name for name, canon in FAMILIES["cmu"].items()}
+    sk = source.skeleton
+    return replace(source, skeleton=Skeleton(tuple(named.get(n, n) for n in sk.names), sk.parents, sk.rest_positions))
+
+
 def _pitch(human, clip) -> tuple[float, float]:
     """The left foot bone's pitch against its rest (degrees, toe up > 0), min and max."""
     G = clip.global_rotations()[:, human.skeleton.index("foot.L")]
@@ -55,7 +67,7 @@ def _pitch(human, clip) -> tuple[float, float]:
     return round(float(pitch.min()), 1), round(float(pitch.max()), 1)
 
 
-def measure(seed: int, motion: str, seconds: float, ways=(False, True)) -> list[dict]:
+def measure(seed: int, motion: str, seconds: float, ways=(False, True), mocap: bool = False) -> list[dict]:
     import synmitsuba as sm
     outfit = ["tshirt", "trousers", "sneakers"] if seed % 4 != 3 else ["tshirt", "shorts"]
     recipe = sm.sample_subject(np.random.default_rng(seed), {"outfit": outfit, "jacket": False, "texture_size": 64,
@@ -66,6 +78,7 @@ def measure(seed: int, motion: str, seconds: float, ways=(False, True)) -> list[
         recipe = replace(recipe, garments=[g for g in recipe.garments if not GARMENTS[g.kind].footwear])
     human = sm.build_subject(recipe)
     source = sm.procedural_motion(motion, np.random.default_rng(seed), seconds=seconds)
+    source = as_mocap(source) if mocap else source
     rows = []
     for planted in ways:
         clip, secs = _clip(human, source, planted)
@@ -89,9 +102,10 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=1.0)
     ap.add_argument("--source-root-only", action="store_true",
                     help="only the plain retarget (runs on code from before retarget_to_subject)")
+    ap.add_argument("--mocap", action="store_true", help="the clips with a CMU BVH's joint names (mocap to retargeting)")
     args = ap.parse_args()
     ways = (False,) if args.source_root_only else (False, True)
-    rows = [r for s in range(args.subjects) for m in args.motions.split(",") for r in measure(s, m, args.seconds, ways)]
+    rows = [r for s in range(args.subjects) for m in args.motions.split(",") for r in measure(s, m, args.seconds, ways, args.mocap)]
     summary = {}
     for planted in ways:
         mine = [r for r in rows if r["planted"] == planted]
@@ -102,7 +116,7 @@ def main() -> int:
             "slide_mm_worst_by_motion": {m: max(r["slide_mm_max"] for r in mine if r["motion"] == m)
                                          for m in args.motions.split(",")},
             "seconds_median": float(np.median([r["seconds"] for r in mine]))}
-    print(json.dumps({"rows": rows, "summary": summary}, indent=1))
+    print(json.dumps({"mocap": args.mocap, "rows": rows, "summary": summary}, indent=1))
     return 0
 
 

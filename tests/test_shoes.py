@@ -80,17 +80,19 @@ def test_at_rest_every_shoe_vertex_is_outside_the_foot_and_the_forefoot_inside_t
 
 
 @pytest.mark.parametrize("motion", ["walk", "run"])
-def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, kind="sneakers"):
+def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, kind="sneakers", mocap=False):
     """Placed as composition places a clip (its lowest point over the clip on the ground), the
     lowest sole point is never under the ground; in a walk (one foot always planted, rolling
     from the heel to the ball) it is on it at every frame (the clip is planted on the shoes'
     soles: with the source's root height it floated 3-6 mm in most frames, 11-23 mm at worst);
     a sole point on the ground moves under 4 mm a frame while it stays there in a walk, 8 mm in
     a run (5.5-11 and 11-19 mm on the source's root path, whose stride is the humanoid's); the
-    forefoot never leaves its shoe."""
+    forefoot never leaves its shoe. ``mocap``: the clip's joints named as a CMU BVH names them, so
+    its soles are estimated from its ankles and toes."""
     from synmitsuba.compose.subjects import clip_bounds
     h = _subject(kind)
-    clip = sm.retarget_to_subject(sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0), h)
+    source = sm.procedural_motion(motion, np.random.default_rng(0), seconds=1.0)
+    clip = sm.retarget_to_subject(as_cmu(source) if mocap else source, h)
     _, _, lift = clip_bounds(h, clip)
     shoe = _shoe(h)
     front = [ids[_covered(h.body.vertices[ids], kind)] for ids in (_foot(h, 1.0), _foot(h, -1.0))]
@@ -111,6 +113,22 @@ def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, k
     if motion == "walk":
         assert lowest.max() < 5e-4, lowest
     assert max(slide) < (0.004 if motion == "walk" else 0.008), slide  # a run: 11-19 mm without
+
+
+def as_cmu(motion):
+    """``motion`` with its joints named as a CMU BVH names them."""
+    from dataclasses import replace
+    from synmitsuba.body.skeleton import Skeleton
+    from synmitsuba.motion.names import FAMILIES
+    named = {canon: name for name, canon in FAMILIES["cmu"].items()}
+    sk = motion.skeleton
+    return replace(motion, skeleton=Skeleton(tuple(named.get(n, n) for n in sk.names), sk.parents, sk.rest_positions))
+
+
+def test_a_mocap_walk_is_planted_on_the_soles_too():
+    """A walk that reaches retargeting as mocap (CMU joint names) is planted as the procedural one
+    is: before its soles were estimated it kept its source's root path and floated 5-17 mm."""
+    test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe("walk", mocap=True)
 
 
 def test_styles_are_drawn_with_the_outfit_boots_never_under_trousers_heels_under_skirts():

@@ -194,19 +194,31 @@ def planted(clip: Motion, human: LayeredHuman, source: Motion) -> Motion:
     """The clip with its root moved at each frame so that the subject's feet stand where the
     source's do, whatever the new legs' and feet's lengths: up or down until its lowest sole
     point is as high as the source's (scaled as retargeting scales the root), and across so that
-    the sole points on the ground hold still while they are on it (``held_still``). Sources on
-    the procedural humanoid only, whose soles are known (``humanoid.sole_clearance``); others as
-    they are (``clip_bounds`` then lifts the whole clip onto the ground)."""
-    from synmitsuba.motion.humanoid import humanoid_skeleton, sole_clearance
-    if source.skeleton.names != humanoid_skeleton().names or clip.skeleton.names == source.skeleton.names:
+    the sole points on the ground hold still while they are on it (``held_still``). The source's
+    soles: the procedural humanoid's exactly (``humanoid.sole_clearance``), a mocap skeleton's
+    from its ankles and toes (``contacts.foot_clearance``); a source whose feet are not known
+    stays as it is (``clip_bounds`` then lifts the whole clip onto the ground)."""
+    if clip.skeleton.names == source.skeleton.names:
         return clip
-    wanted = clip.meta.get("pelvis_ratio", 1.0) * sole_clearance(source.rotations, source.root_translation)
+    clearance = source_clearance(source)
+    if clearance is None:
+        return clip
+    wanted = clip.meta.get("pelvis_ratio", 1.0) * clearance
     root = clip.root_translation.copy()
     points = human.sole_points(clip.rotations, root)
     rise = wanted - points[..., 1].min(1)
     root[:, 1] += rise
     root[:, [0, 2]] += held_still(points[..., [0, 2]], points[..., 1] + rise[:, None], human.sole_sides)
     return replace(clip, root_translation=root)
+
+
+def source_clearance(source: Motion) -> np.ndarray | None:
+    """The source clip's sole clearance per frame (F,), or None when its feet are not known."""
+    from synmitsuba.motion.contacts import foot_clearance
+    from synmitsuba.motion.humanoid import humanoid_skeleton, sole_clearance
+    if source.skeleton.names == humanoid_skeleton().names:
+        return sole_clearance(source.rotations, source.root_translation)
+    return foot_clearance(source)
 
 
 def held_still(xz: np.ndarray, y: np.ndarray, sides: np.ndarray, touch: float = 0.002) -> np.ndarray:
