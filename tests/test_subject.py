@@ -1299,11 +1299,11 @@ def _dressed(outfit: list, seed: int = 3):
 def test_a_tank_top_leaves_the_arms_bare_but_for_a_strap_over_each_shoulder():
     """Measured on the built mesh: no tank vertex is closest to an arm vertex a third of the way
     down the arm (the inner arm lies against the chest under the armpit), and none lies out past
-    the shoulder joint over the armpit; over the shoulders (3 cm under the joints' height and 7 cm
-    under the neck's base, and up) the tank is one
-    strap a side, at most 5 cm wide, between the neck and the shoulder joint, running from the
-    front over to the back; at the front and the back its top is a scoop 8 cm or more under the
-    neck's base."""
+    the shoulder joint over the armpit; from 1 cm under the neck's base up the tank is one strap
+    a side, at most 5 cm wide, between the neck and the shoulder joint, running (that wide) from
+    the front over to the back; at the front and the back its top is a scoop 8 cm or more under the neck's
+    base, and a U: the front's top edge rises from the centre towards the straps (it was one level
+    cut, its corners at the straps stepped)."""
     from scipy.spatial import cKDTree
     from synmitsuba.body.garments import TANK_STRAP
     h, parts = _dressed(["tank", "shorts"])
@@ -1312,16 +1312,21 @@ def test_a_tank_top_leaves_the_arms_bare_but_for_a_strap_over_each_shoulder():
     assert r.arm_s[near].max() < 0.3
     ax, nz = np.abs(tank[:, 0] - r.neck_xz[0]), r.neck_xz[1]
     assert ax[tank[:, 1] > r.shoulder[1] - 0.05].max() < r.shoulder[0]
-    over = tank[:, 1] > max(r.shoulder[1] - 0.03, r.neck_y - 0.07)
+    over = tank[:, 1] > r.neck_y - 0.01
     for side in (1, -1):
         strap = tank[over & (np.sign(tank[:, 0] - r.neck_xz[0]) == side)]
         a = np.abs(strap[:, 0] - r.neck_xz[0])
         assert np.ptp(a) < 2 * TANK_STRAP + 0.015 and r.neck_radius < a.min() and a.max() < r.shoulder[0]
-        assert strap[:, 2].min() < nz - 0.03 and strap[:, 2].max() > nz + 0.03  # front to back
+        down = tank[(tank[:, 1] > r.shoulder[1] - 0.03) & (np.sign(tank[:, 0] - r.neck_xz[0]) == side)
+                    & (ax >= a.min()) & (ax <= a.max())]  # the strap's width, further down
+        assert down[:, 2].min() < nz - 0.03 and down[:, 2].max() > nz + 0.03  # front to back
     centre = ax < 0.03
     for front in (True, False):
         mid = tank[centre & ((tank[:, 2] > nz) == front)]
         assert mid[:, 1].max() < r.neck_y - 0.08
+    ahead = tank[:, 2] > nz + 0.03
+    edge = [tank[ahead & (ax >= lo) & (ax < lo + 0.01), 1].max() for lo in (0.0, 0.02, 0.04, 0.06)]
+    assert np.all(np.diff(edge) > 0) and edge[-1] - edge[0] > 0.02, edge
 
 
 def _front_centre(r, v: np.ndarray, y: float) -> np.ndarray:

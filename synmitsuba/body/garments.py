@@ -90,17 +90,29 @@ def _neckline(r, v: np.ndarray) -> np.ndarray:
 TANK_STRAP = 0.018    # metres: half a tank top's strap's width
 TANK_SCOOP = 0.1      # metres under the neck's base its neckline reaches, at the front and the back
 TANK_ARMHOLE = 0.075  # and its armholes under the shoulder joints
+TANK_REACH = 0.12     # of the arm's length from the shoulder: the armholes cut the arm before this
+TANK_ROUND = 0.012    # metres: how round the corners where the neckline and the armholes meet the straps
 
 
 def _tank(g, r, v):
-    """A tank top: a top without sleeves, cut at the front and the back to a scoop and at the
-    sides to the armholes, a strap over each shoulder half-way from the neck to the joint."""
-    base = _top(lambda L: -0.1)(g, r, v)
+    """A tank top: a top without sleeves, a strap over each shoulder half-way from the neck to
+    the joint; between the straps the neckline scoops down in a U at the front and the back
+    (a half ellipse from the straps' inner edges at the neck's base), outside them the armholes
+    curve down under the shoulders (quarter ellipses from their outer edges at the joints'
+    height): each curve leaves its strap's edge upright, and the corner is rounded. The arms
+    are cut by the armholes, not where the arm's skin begins (its vertex group: a strap ending
+    there had a saw-tooth edge over the shoulder)."""
+    base = _top(lambda L: TANK_REACH)(g, r, v)
     ax = np.abs(v[:, 0] - r.neck_xz[0])
     strap_x = r.neck_radius + NECK_EASE + 0.35 * (r.shoulder[0] - r.neck_radius - NECK_EASE)
+    inner, outer = strap_x - TANK_STRAP, strap_x + TANK_STRAP
     strap = TANK_STRAP - np.abs(ax - strap_x)
-    level = np.where(ax < strap_x, r.neck_y - TANK_SCOOP, r.shoulder[1] - TANK_ARMHOLE)  # the step hides in the strap
-    return np.minimum(base, np.maximum(strap, level - v[:, 1]))
+    scoop = r.neck_y - TANK_SCOOP * np.sqrt(1.0 - np.clip(ax / inner, 0.0, 1.0) ** 2)
+    out = np.clip((ax - outer) / max(r.shoulder[0] - outer, 0.02), 0.0, 1.0)
+    armhole = r.shoulder[1] - TANK_ARMHOLE * np.sqrt(1.0 - (1.0 - out) ** 2)
+    a, b = strap, np.where(ax < strap_x, scoop, armhole) - v[:, 1]  # the curves' step hides in the strap
+    either = 0.5 * (a + b + np.sqrt((a - b) ** 2 + TANK_ROUND ** 2))  # max(a, b), rounded where they meet
+    return np.minimum(base, either)
 
 
 OPEN_FRONT = (0.26, 0.035)  # metres: how far under the neck's base a coat's front opening closes, and
