@@ -52,8 +52,8 @@ def sole_points(skeleton: Skeleton) -> list[SolePoint] | None:
 
 
 def foot_clearance(motion: Motion) -> np.ndarray | None:
-    """The clip's sole clearance per frame (F,), metres in its own units (0 while a foot is on the
-    ground), or None when its feet are not known (``sole_points``)."""
+    """The clip's sole clearance per frame (F,), in its units (metres once imported: 0 while a
+    foot is on the ground), or None when its feet are not known (``sole_points``)."""
     points = sole_points(motion.skeleton)
     if points is None:
         return None
