@@ -8,7 +8,7 @@ over 1/2). Standing (``LayeredHuman.standing``) the tip and the forefoot are on 
 exactly; the clip's figures say how a walk's rolling foot and a jump's pointed toes leave it.
 Build cost: the pair of heels against a pair of dress shoes on the same body. Prints JSON.
 
-    python bench/heels.py [--subjects 6] [--seconds 1.0] [--stride 2]
+    python bench/heels.py [--subjects 6] [--seconds 1.0] [--stride 2] [--full-roll]
 """
 from __future__ import annotations
 
@@ -40,14 +40,15 @@ def _toes(human, shoe_rest: np.ndarray) -> np.ndarray:
     return np.isin(human.split.source, np.concatenate(rows))
 
 
-def measure(seed: int, motion: str, seconds: float, stride: int) -> dict:
+def measure(seed: int, motion: str, seconds: float, stride: int, full_roll: bool = False) -> dict:
     import synmitsuba as sm
     from reference import winding_numbers
-    from synmitsuba.compose.subjects import clip_bounds
+    from synmitsuba.compose.subjects import clip_bounds, heeled_roll
     outfit = ["tshirt", "skirt", "heels"] if seed % 2 else ["dress", "heels"]
     recipe = sm.sample_subject(np.random.default_rng(seed), {"outfit": outfit, "jacket": False, "texture_size": 64})
     human = sm.build_subject(recipe)
-    clip = sm.retarget_to_subject(sm.procedural_motion(motion, np.random.default_rng(seed), seconds=seconds), human)
+    roll = 1.0 if full_roll else heeled_roll(human.heels)
+    clip = sm.retarget_to_subject(sm.procedural_motion(motion, np.random.default_rng(seed), seconds=seconds, roll=roll), human)
     _, _, lift = clip_bounds(human, clip)
     part = next(p for p in human.parts if p.name == "heels")
     block = part.rest[:, 1] < -1e-6
@@ -70,7 +71,7 @@ def measure(seed: int, motion: str, seconds: float, stride: int) -> dict:
             "tip_off_ground_mm_median": round(1000 * float(np.median(a[:, 1])), 1),
             "forefoot_off_ground_mm_median": round(1000 * float(np.median(a[:, 2])), 1),
             "both_within_5mm_share": round(float(((a[:, 1] < 0.005) & (a[:, 2] < 0.005)).mean()), 3),
-            "toes_inside_min": round(float(a[:, 3].min()), 4)}
+            "toes_inside_min": round(float(a[:, 3].min()), 4), "roll": round(roll, 3)}
 
 
 def build_cost(seed: int) -> dict:
@@ -91,8 +92,10 @@ def main() -> int:
     ap.add_argument("--subjects", type=int, default=6)
     ap.add_argument("--seconds", type=float, default=1.0)
     ap.add_argument("--stride", type=int, default=2)
+    ap.add_argument("--full-roll", action="store_true",
+                    help="the clip rolls its feet as barefoot (what composition did before heeled_roll)")
     args = ap.parse_args()
-    rows = [measure(s, m, args.seconds, args.stride) for s in range(args.subjects) for m in MOTIONS]
+    rows = [measure(s, m, args.seconds, args.stride, args.full_roll) for s in range(args.subjects) for m in MOTIONS]
     print(json.dumps({"rows": rows, "build_seconds": build_cost(0),
                       "lowest_mm_min": min(r["lowest_mm_min"] for r in rows),
                       "toes_inside_min": min(r["toes_inside_min"] for r in rows),

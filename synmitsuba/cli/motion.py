@@ -6,6 +6,7 @@ retargeted onto a sampled subject, or shown as a stick figure (``--stick``) on i
 """
 from __future__ import annotations
 
+import copy
 import os
 
 import numpy as np
@@ -31,7 +32,7 @@ def _figure_scene(motion, f: int, human=None, cloth=None):
 def preview(args) -> int:
     import synmitsuba as sm
     from synmitsuba.motion.sources import check_motion_source, load_motion
-    from synmitsuba.compose.subjects import retarget_to_subject
+    from synmitsuba.compose.subjects import heeled_roll, retarget_to_subject
     from synmitsuba.body.recipe import SubjectConfig
     check_motion_source(args.clip, field="CLIP")  # before anything heavy
     try:
@@ -42,10 +43,13 @@ def preview(args) -> int:
     output_dir(args.out)
     sm.set_variant(args.variant)
     rng = np.random.default_rng(args.seed)
+    again = copy.deepcopy(rng)  # the same clip once more, its feet rolling as the subject's heels let them
     motion = load_motion(args.clip, rng, seconds=args.seconds, field="CLIP")
     human, rows = None, [None]
     if not args.stick:
         human = sm.build_subject(sm.sample_subject(rng, config))
+        if human.heels:
+            motion = load_motion(args.clip, again, seconds=args.seconds, field="CLIP", roll=heeled_roll(human.heels))
         motion = retarget_to_subject(motion, human)
         simulated = sm.simulate_cloth(human, motion) if args.cloth != "skinned" else None
         rows = {"skinned": [None], "simulated": [simulated], "both": [None, simulated]}[args.cloth]

@@ -67,11 +67,12 @@ class MotionSpec:
     base: str = ""
     start: int = 0
 
-    def clip(self, where: str = "motion") -> Motion:
+    def clip(self, where: str = "motion", roll: float = 1.0) -> Motion:
+        """The clip (a procedural one with its feet's roll scaled by ``roll``)."""
         from synmitsuba.motion.library import random_window
         from synmitsuba.motion.sources import load_motion
         rng = np.random.default_rng(self.seed)
-        m = load_motion(self.source, rng, seconds=self.seconds, base=self.base, field=where)
+        m = load_motion(self.source, rng, seconds=self.seconds, base=self.base, field=where, roll=roll)
         return random_window(m, rng, self.seconds, self.fps)
 
     def to_dict(self) -> dict:
@@ -180,8 +181,24 @@ def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) ->
 
 
 def retargeted_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> Motion:
-    """The subject's clip on its skeleton (``retarget_to_subject``)."""
-    return retarget_to_subject(motion.clip(where), human)
+    """The subject's clip on its skeleton (``retarget_to_subject``), a procedural one rolling its
+    feet as the subject's shoes let it (``heeled_roll``)."""
+    return retarget_to_subject(motion.clip(where, heeled_roll(human.heels)), human)
+
+
+def heeled_roll(heels) -> float:
+    """The share of a barefoot walk's heel-strike and toe-off pitches a walk in ``heels`` keeps
+    (1 in flat shoes): a heel already bends the toes up against the foot by its pitch, and at
+    toe-off they bend no further than a bare foot's do (``procedural.ROLL``), at least a
+    quarter of the roll left."""
+    from synmitsuba.motion.procedural import ROLL
+    if not heels:
+        return 1.0
+    pitch = max(float(np.arccos(np.clip((np.trace(h.rotation) - 1) / 2, -1.0, 1.0))) for h in heels)
+    return max(HEELED_ROLL_MIN, 1.0 - pitch / ROLL["walk"][1])
+
+
+HEELED_ROLL_MIN = 0.25
 
 
 def retarget_to_subject(source: Motion, human: LayeredHuman) -> Motion:

@@ -170,9 +170,10 @@ def _rolled_ankle(sk, side: str, flat, roll: FootRoll) -> np.ndarray:
     return pivot + (flat - ankle) + np.einsum("fij,fj->fi", turn, ankle - pivot)
 
 
-def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.ndarray:
+def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0, roll_scale: float = 1.0) -> np.ndarray:
     """Walk, jog, run (forward, +z) or side-step (``lateral`` = +1 left / -1 right): feet follow
-    planted tracks, the legs reach them by IK. Returns the root translation."""
+    planted tracks, the legs reach them by IK; ``roll_scale`` scales the feet's heel-strike and
+    toe-off pitches. Returns the root translation."""
     beta, lift, drop, bob, lean, elbow = GAIT["walk" if kind == "side_step" else kind]
     style = {"normal": 1.0, "relaxed": 0.85, "brisk": 1.15}.get(a.get("style", "normal"), 1.0)
     speed, stride = a["speed"], a["stride"]
@@ -188,7 +189,8 @@ def _locomotion(p: _Pose, t, kind: str, a: dict, lateral: float = 0.0) -> np.nda
         ankle = sk.rest_positions[sk.index(f"{side[0]}_ankle")] + (speed * along)[:, None] * direction
         ankle[:, 1] += height
         if not lateral:  # a side step keeps its feet flat
-            rolls[side] = foot_roll(np.mod(f * t + offset, 1.0), beta, tuple(np.multiply(ROLL[kind], (style, style, 1, 1))))
+            pitches = tuple(np.multiply(ROLL[kind], (style * roll_scale, style * roll_scale, 1, 1)))
+            rolls[side] = foot_roll(np.mod(f * t + offset, 1.0), beta, pitches)
             ankle = _rolled_ankle(sk, side, ankle, rolls[side])
         hip_off = sk.offsets[sk.index(f"{side[0]}_hip")]
         leg = 0.97 * (np.linalg.norm(sk.offsets[sk.index(f"{side[0]}_knee")])
@@ -328,9 +330,11 @@ def _gesture(p: _Pose, t, a: dict, rng) -> None:
 
 
 def procedural_motion(kind: str, rng: np.random.Generator, seconds: float = 2.0, fps: float = 30,
-                      **params) -> Motion:
+                      roll: float = 1.0, **params) -> Motion:
     """A ``kind`` of motion (see ``KINDS``) on the humanoid skeleton; parameters not given are
-    sampled from ``rng``."""
+    sampled from ``rng``. ``roll`` scales how far walks, jogs and runs pitch the feet at heel
+    strike and toe-off (``ROLL``; less in heels: ``compose.subjects.heeled_roll``); it draws
+    nothing from ``rng``."""
     if kind not in PARAMS:
         raise ConfigError("motion kind", kind, f"use one of {', '.join(KINDS)}")
     if not isinstance(rng, np.random.Generator):
@@ -339,6 +343,8 @@ def procedural_motion(kind: str, rng: np.random.Generator, seconds: float = 2.0,
         raise ConfigError("seconds", seconds, "give a duration in (0, 600] seconds")
     if not (isinstance(fps, (int, float)) and 1 <= fps <= 1000):
         raise ConfigError("fps", fps, "give a frame rate in [1, 1000]")
+    if not (isinstance(roll, (int, float)) and 0 <= roll <= 1.5):
+        raise ConfigError("roll", roll, "give a share of the foot roll in [0, 1.5]")
     a = _params(kind, rng, params)
     n = max(2, int(round(seconds * fps)))
     t = np.arange(n) / fps
@@ -347,7 +353,7 @@ def procedural_motion(kind: str, rng: np.random.Generator, seconds: float = 2.0,
     anchor = "stance"
     root = None
     if kind in ("walk", "jog", "run"):
-        root = _locomotion(p, t, kind, a)
+        root = _locomotion(p, t, kind, a, roll_scale=roll)
     elif kind == "side_step":
         root = _locomotion(p, t, kind, a, lateral=1.0 if a["handedness"] == "left" else -1.0)
     elif kind == "idle":

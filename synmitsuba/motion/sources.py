@@ -49,14 +49,14 @@ def check_motion_source(source: str, base: str = "", field: str = "motion") -> t
 
 
 def load_motion(source: str, rng: np.random.Generator, seconds: float = 2.0, base: str = "",
-                labels=(), field: str = "motion") -> Motion:
+                labels=(), field: str = "motion", roll: float = 1.0) -> Motion:
     """The motion ``source`` names: a procedural kind (``seconds`` long, parameters from
-    ``rng``), or a .bvh / AMASS .npz file (relative paths are taken from ``base``). ``field``
-    names the setting in errors (e.g. ``subjects[2].motion``)."""
+    ``rng``, its feet's roll scaled by ``roll``), or a .bvh / AMASS .npz file (relative paths
+    are taken from ``base``). ``field`` names the setting in errors (e.g. ``subjects[2].motion``)."""
     kind, path = check_motion_source(source, base, field)
     if kind == "procedural":
         from synmitsuba.motion.procedural import procedural_motion
-        return procedural_motion(str(source), rng, seconds=seconds)
+        return procedural_motion(str(source), rng, seconds=seconds, roll=roll)
     if kind == "bvh":
         from synmitsuba.motion.bvh import load_bvh
         return load_bvh(path, labels=labels)
