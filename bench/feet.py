@@ -18,9 +18,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import sys
 import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from reference import named_as  # noqa: E402
 
 TOUCH = 0.002  # metres: a sole point this close to the ground is on it
 
@@ -50,16 +55,6 @@ def _soles(human, clip) -> np.ndarray:
     return np.stack(out) + [0.0, lift, 0.0]
 
 
-def as_mocap(source):
-    """``source`` with its joints named as a CMU BVH names them (the same skeleton and frames)."""
-    from dataclasses import replace
-    from synmitsuba.body.skeleton import Skeleton
-    from synmitsuba.motion.names import FAMILIES
-    named = {canon: name for name, canon in FAMILIES["cmu"].items()}
-    sk = source.skeleton
-    return replace(source, skeleton=Skeleton(tuple(named.get(n, n) for n in sk.names), sk.parents, sk.rest_positions))
-
-
 def _pitch(human, clip) -> tuple[float, float]:
     """The left foot bone's pitch against its rest (degrees, toe up > 0), min and max."""
     G = clip.global_rotations()[:, human.skeleton.index("foot.L")]
@@ -78,7 +73,7 @@ def measure(seed: int, motion: str, seconds: float, ways=(False, True), mocap: b
         recipe = replace(recipe, garments=[g for g in recipe.garments if not GARMENTS[g.kind].footwear])
     human = sm.build_subject(recipe)
     source = sm.procedural_motion(motion, np.random.default_rng(seed), seconds=seconds)
-    source = as_mocap(source) if mocap else source
+    source = named_as(source, "cmu") if mocap else source
     rows = []
     for planted in ways:
         clip, secs = _clip(human, source, planted)

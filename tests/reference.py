@@ -73,3 +73,15 @@ def unit_weights(**units: float) -> np.ndarray:
     for name, v in units.items():
         w[FACE_UNITS.index(name)] = v
     return w
+
+
+def named_as(motion, family: str):
+    """``motion`` with its joints renamed as mocap ``family`` (``motion.names.FAMILIES``, e.g.
+    "cmu" as a CMU BVH names them) where the family has a name for them: the same skeleton and
+    frames, which retargeting then takes for that family's mocap."""
+    from dataclasses import replace
+    from synmitsuba.body.skeleton import Skeleton
+    from synmitsuba.motion.names import FAMILIES
+    named = {canon: name for name, canon in FAMILIES[family].items()}
+    sk = motion.skeleton
+    return replace(motion, skeleton=Skeleton(tuple(named.get(n, n) for n in sk.names), sk.parents, sk.rest_positions))

@@ -420,14 +420,13 @@ def test_mocap_sole_clearance_matches_the_humanoids_exact_one(kind, family, tol)
     flight, and on the ground wherever a foot is. Wherever the source's floor is; a skeleton
     without feet has none."""
     from dataclasses import replace
+    from reference import named_as
     from synmitsuba.body.skeleton import Skeleton
     from synmitsuba.motion.contacts import foot_clearance
     from synmitsuba.motion.humanoid import sole_clearance
-    from synmitsuba.motion.names import FAMILIES
     m = sm.procedural_motion(kind, np.random.default_rng(2), seconds=2.0)
-    named = {canon: name for name, canon in FAMILIES[family].items()}
     sk = m.skeleton
-    cmu = replace(m, skeleton=Skeleton(tuple(named.get(n, n) for n in sk.names), sk.parents, sk.rest_positions))
+    cmu = named_as(m, family)
     exact = sole_clearance(m.rotations, m.root_translation)
     assert np.abs(foot_clearance(cmu) - exact).max() < tol
     assert np.all(foot_clearance(cmu)[exact < 1e-9] < 1e-4)

@@ -180,6 +180,9 @@ def place_motion(motion: Motion, position, yaw_deg: float, lift: float = 0.0) ->
     return centred.moved(float(yaw_deg), [pos[0], float(lift), pos[-1]])
 
 
+HEELED_ROLL_MIN = 0.25  # the least share of the foot roll a walk in heels keeps
+
+
 def retargeted_clip(human: LayeredHuman, motion: MotionSpec, where: str = "motion") -> Motion:
     """The subject's clip on its skeleton (``retarget_to_subject``), a procedural one rolling its
     feet as the subject's shoes let it (``heeled_roll``)."""
@@ -191,14 +194,12 @@ def heeled_roll(heels) -> float:
     (1 in flat shoes): a heel already bends the toes up against the foot by its pitch, and at
     toe-off they bend no further than a bare foot's do (``procedural.ROLL``), at least a
     quarter of the roll left."""
+    from synmitsuba.geometry import matrix_to_axis_angle
     from synmitsuba.motion.procedural import ROLL
     if not heels:
         return 1.0
-    pitch = max(float(np.arccos(np.clip((np.trace(h.rotation) - 1) / 2, -1.0, 1.0))) for h in heels)
+    pitch = max(float(np.linalg.norm(matrix_to_axis_angle(h.rotation))) for h in heels)
     return max(HEELED_ROLL_MIN, 1.0 - pitch / ROLL["walk"][1])
-
-
-HEELED_ROLL_MIN = 0.25
 
 
 def retarget_to_subject(source: Motion, human: LayeredHuman) -> Motion:
