@@ -651,7 +651,7 @@ def test_every_texture_parameter_changes_the_texture():
     changes = {"base_lab": [70.0, 20.0, -30.0], "pattern": "dots", "pattern_lab": [80.0, 40.0, 0.0], "pattern_scale": 12.0,
                "pattern_width": 0.6, "pattern_alpha": 0.5, "decal": "circle", "decal_lab": [20.0, 0.0, 40.0],
                "decal_center": [0.3, 0.6], "decal_size": 0.3, "bump": "ribbed", "bump_amplitude": 0.9,
-               "bump_scale": 10.0, "uv_scale": 1.7, "uv_rotation_deg": 30.0, "uv_offset": [0.25, 0.1]}
+               "bump_scale": 10.0, "uv_scale": 1.7, "uv_rotation_deg": 30.0, "uv_offset": [0.25, 0.1], "uv_aspect": 1.6}
     for key, value in changes.items():
         a, h = render_garment_texture(GarmentTextureParams(**{**base.to_dict(), key: value}), 64)
         assert not (np.array_equal(a, a0) and np.array_equal(h, h0)), key
@@ -668,12 +668,12 @@ def test_texture_edges_are_box_filtered(pattern, decal):
     from synmitsuba.body.textures import GarmentTextureParams, render_garment_texture
     p = GarmentTextureParams(pattern=pattern, decal=decal, base_lab=[90.0, 0.0, 0.0], pattern_lab=[0.0, 0.0, 0.0],
                              decal_lab=[0.0, 0.0, 0.0], pattern_scale=6.0, pattern_width=0.4, decal_size=0.3,
-                             uv_rotation_deg=17.0, uv_offset=[0.1, 0.3])
+                             uv_rotation_deg=17.0, uv_offset=[0.1, 0.3], uv_aspect=1.3)
     n, k = 96, 8
     ours = render_garment_texture(p, n)[0][..., 1]
     u, v = np.meshgrid((np.arange(n * k) + 0.5) / (n * k), 1 - (np.arange(n * k) + 0.5) / (n * k))
     a = np.radians(p.uv_rotation_deg)
-    x, y = np.cos(a) * u - np.sin(a) * v + 0.1, np.sin(a) * u + np.cos(a) * v + 0.3
+    x, y = np.cos(a) * 1.3 * u - np.sin(a) * v + 0.1, np.sin(a) * 1.3 * u + np.cos(a) * v + 0.3
     s, w = p.pattern_scale, p.pattern_width
     if pattern == "stripes":
         ink = (y * s) % 1 < w
@@ -681,7 +681,7 @@ def test_texture_edges_are_box_filtered(pattern, decal):
         ink = np.hypot((x * s) % 1 - 0.5, (y * s) % 1 - 0.5) < w / 2
     else:
         ink = (np.floor(x * s) + np.floor(y * s)) % 2 == 1
-    dx, dy = (u - 0.5) / 0.3, (v - 0.5) / 0.3
+    dx, dy = (u - 0.5) * 1.3 / 0.3, (v - 0.5) / 0.3
     r = np.hypot(dx, dy)
     if decal == "star":
         ink |= (r < 0.55 + 0.45 * np.cos(5 * np.arctan2(dy, dx))) & (r < 1)
@@ -695,6 +695,73 @@ def test_texture_edges_are_box_filtered(pattern, decal):
     expected = bright * (1 - share)
     err = np.abs(ours - expected) / bright
     assert err.mean() < 0.06 and err.max() < 0.3, (err.mean(), err.max())
+
+
+def _uv_to_rest(m, uv: np.ndarray) -> np.ndarray:
+    """The rest points of garment mesh ``m`` at texture coordinates ``uv`` (N, 2): the face whose
+    uv triangle holds each (barycentric, all faces at once), nan where none does."""
+    a, b, c = (m.uv[m.faces[:, i]] for i in range(3))
+    out = np.full((len(uv), 3), np.nan)
+    for n, q in enumerate(uv):
+        d = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
+        l1 = ((q[0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (q[1] - a[:, 1])) / np.where(d == 0, 1, d)
+        l2 = ((b[:, 0] - a[:, 0]) * (q[1] - a[:, 1]) - (q[0] - a[:, 0]) * (b[:, 1] - a[:, 1])) / np.where(d == 0, 1, d)
+        inside = np.flatnonzero((d != 0) & (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1))
+        if len(inside):
+            f = inside[0]
+            out[n] = (1 - l1[f] - l2[f]) * m.vertices[m.faces[f, 0]] + l1[f] * m.vertices[m.faces[f, 1]] + \
+                l2[f] * m.vertices[m.faces[f, 2]]
+    return out
+
+
+def test_a_print_lies_round_on_the_chest_and_other_kinds_take_none():
+    """A sampled t-shirt's drawn decal is printed on the chest: its centre, looked up through
+    the built mesh's uv, is on the front within 2 cm of the centre line and 8-24 cm under the
+    neck's base; its circle's rim is as wide on the body as it is tall (within 15 %: the uv
+    atlas is 1.47 times wider in metres than tall there). Trousers, skirts and jackets are drawn
+    without a decal, whatever their texture drew."""
+    from synmitsuba.body.garments import build_garment, lay_out, sample_garment
+    h = sm.build_subject(sm.sample_subject(np.random.default_rng(13)))
+    g = sample_garment("tshirt", np.random.default_rng(2))
+    g.texture.decal, g.texture.decal_size = "circle", 0.15  # a chest print, not a logo
+    g.texture = lay_out(g.texture, GARMENTS["tshirt"])
+    m = build_garment(h.body, h.regions, h.split, g)
+    t, r = g.texture, h.regions
+    centre = _uv_to_rest(m, np.array([t.decal_center]))[0]
+    assert abs(centre[0] - r.neck_xz[0]) < 0.02 and centre[2] > r.neck_xz[1], centre
+    assert 0.08 < r.neck_y - centre[1] < 0.24, r.neck_y - centre[1]
+    ang = np.radians([0, 90, 180, 270])
+    rim = _uv_to_rest(m, np.array(t.decal_center) + t.decal_size * np.stack([np.cos(ang) / t.uv_aspect, np.sin(ang)], 1))
+    wide, tall = np.linalg.norm(rim[0] - rim[2]), np.linalg.norm(rim[1] - rim[3])
+    assert abs(wide / tall - 1) < 0.15, (wide, tall)  # the chest's atlas: 1.47 wider than tall, uv_aspect 1.35
+    assert 0.1 < tall < 0.26, tall  # 6-12 cm in radius for a drawn size of 0.08-0.2
+    for kind in ("trousers", "skirt", "jacket", "dress"):
+        drawn = sample_garment(kind, np.random.default_rng(2)).texture
+        assert drawn.decal == "none" and drawn.uv_aspect != 1.0, (kind, drawn.decal)
+
+
+def test_each_kinds_uv_aspect_is_its_mesh_s():
+    """``uv_aspect`` (metres per unit u over per unit v) against the built meshes on two bodies:
+    over the torso's front for tops (the sleeves' u runs along the arm), the whole mesh for
+    bottoms, skirts and dresses; within 30 % (10 % in the median)."""
+    from synmitsuba.body.garments import build_garment, metres_per_uv, sample_garment, uv_aspect
+    off = {}
+    for seed in (13, 40):
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed)))
+        r = h.regions
+        for kind, k in GARMENTS.items():
+            if k.footwear:
+                continue
+            m = build_garment(h.body, r, h.split, sample_garment(kind, np.random.default_rng(seed)))
+            faces = m.faces
+            if k.layer == GARMENTS["tshirt"].layer or kind == "jumpsuit":
+                c = m.vertices[faces].mean(1)
+                faces = faces[(np.abs(c[:, 0] - r.neck_xz[0]) < 0.1) & (c[:, 2] > r.neck_xz[1]) &
+                              (c[:, 1] > r.waist_y) & (c[:, 1] < r.neck_y - 0.05)]
+            mu, mv = metres_per_uv(m.vertices, faces, m.uv)
+            off[(seed, kind)] = round(mu / mv / uv_aspect(k) - 1, 3)
+    assert max(abs(x) for x in off.values()) < 0.3, off  # the legs and a flare's length vary most between bodies
+    assert abs(np.median(list(off.values()))) < 0.1, off
 
 
 def test_separable_noise_equals_the_general_one():

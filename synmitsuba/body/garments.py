@@ -177,24 +177,25 @@ class GarmentKind:
     takes_jacket: bool = True     # a sampled jacket may go over it
     material: Callable | None = None  # (params, texture size) -> Material; None: garment_material
     cut: str | None = None        # a flare's cut (SKIRT_CUTS) when the garment names none; None: a_line
+    prints: bool = False          # a drawn decal is printed on its chest (other kinds are drawn without one)
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
 GARMENTS: dict[str, GarmentKind] = {
     "tshirt": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.15 + 0.25 * L), (0.2, 0.7),
-                          fabric="jersey"),
+                          fabric="jersey", prints=True),
     "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8),
-                              fabric="jersey"),
+                              fabric="jersey", prints=True),
     "jacket": GarmentKind(Layer.TOP, 0.03, 4, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
                           (0.005, 0.03), (0.002, 0.01), fabric="twill"),
-    "tank": GarmentKind(Layer.TOP, 0.01, 2, "shell", _tank, (0.25, 0.7), fabric="jersey"),
+    "tank": GarmentKind(Layer.TOP, 0.01, 2, "shell", _tank, (0.25, 0.7), fabric="jersey", prints=True),
     "sweater": GarmentKind(Layer.TOP, 0.018, 2, "shell", _top(lambda L: 0.92 + 0.06 * L), (0.45, 0.8),
                            (0.01, 0.03), (0.004, 0.008), fabric="jersey"),
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
     "coat": GarmentKind(Layer.TOP, 0.025, 4, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
                         (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
     "hoodie": GarmentKind(Layer.TOP, 0.016, 2, "shell+hood", _top(lambda L: 0.95 + 0.05 * L), (0.45, 0.8),
-                          (0.01, 0.03), (0.003, 0.006), fabric="jersey"),
+                          (0.01, 0.03), (0.003, 0.006), fabric="jersey", prints=True),
     "shirt": GarmentKind(Layer.TOP, 0.012, 2, "shell+collar", _top(lambda L: 0.93 + 0.07 * L), (0.4, 0.8),
                          (0.005, 0.02), (0.002, 0.004), fabric="plain"),
     # a blazer: a jacket's hip-length bodice, open over the top in a V down to its buttons
@@ -302,6 +303,42 @@ def sample_footwear(shoes: GarmentParams, outfit) -> GarmentParams:
     return sample_garment(kind, rng)
 
 
+# Where a print goes on the body's uv atlas (the template's, so the same on every body): the
+# chest's centre line 14-18 cm under the neck's base; u runs to the wearer's left (+x), v up.
+CHEST_UV = (0.377, 0.72)
+LOGO_UV = (0.045, 0.02)  # a logo sits on the left chest: 9 cm across from the centre line, 3 cm up
+LOGO_SIZE = 0.08         # a drawn decal size under this is a logo (3-4 cm), over it a chest print (6-12 cm)
+# Metres per unit u over per unit v on a kind's mesh (tests/test_subject.py measures them): the
+# body's uv atlas, over the torso's front and the legs alike (1.25-1.5 by body; the chest's 1.47),
+# a skirt's own uv round and down its flare, a dress's bodice and longer flare together.
+UV_ASPECTS = {"body": 1.35, "skirt": 1.9, "dress": 2.7}
+
+
+def uv_aspect(kind: GarmentKind) -> float:
+    """``UV_ASPECTS``' entry for a garment kind."""
+    if kind.shape == "flare":
+        return UV_ASPECTS["skirt"]
+    return UV_ASPECTS["dress" if kind.layer == Layer.DRESS and "flare" in kind.shape else "body"]
+
+
+def lay_out(t: GarmentTextureParams, kind: GarmentKind) -> GarmentTextureParams:
+    """A drawn texture ``t`` laid out on a garment of ``kind`` (no draws): square on its cloth
+    (``uv_aspect``) and its decal printed on the chest of a kind that ``prints`` (centred, or a
+    logo on the left chest; the drawn centre moves a print up or down), dropped on other kinds,
+    where a decal drawn anywhere in the uv square came out on a hip, a thigh or a skirt's side."""
+    aspect = round(uv_aspect(kind), 3)
+    if not kind.prints or t.decal == "none":
+        return dataclasses.replace(t, uv_aspect=aspect, decal="none")
+    d = t.decal_size
+    if d < LOGO_SIZE and t.decal != "band":
+        centre, size = [CHEST_UV[0] + LOGO_UV[0], CHEST_UV[1] + LOGO_UV[1]], 0.021 + 0.2 * (d - 0.05)
+    else:
+        centre = [CHEST_UV[0], CHEST_UV[1] + 0.04 * (t.decal_center[1] - 0.5)]
+        size = 0.042 + 0.35 * max(d - LOGO_SIZE, 0.0)
+    return dataclasses.replace(t, uv_aspect=aspect, decal_center=[round(x, 4) for x in centre],
+                               decal_size=round(size, 4))
+
+
 def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
     from synmitsuba.body.textures import sample_garment_texture
     k = GARMENTS[kind]
@@ -309,7 +346,7 @@ def sample_garment(kind: str, rng: np.random.Generator) -> GarmentParams:
     g = GarmentParams(kind=kind, size=round(float(rng.uniform(0, 1)), 3), ease=round(float(rng.uniform(*k.ease)), 4),
                       length=round(float(rng.uniform(*k.length)), 3),
                       thickness=round(float(rng.uniform(*k.thickness)), 4),
-                      texture=sample_shoe_texture(style, rng) if style else sample_garment_texture(rng))
+                      texture=sample_shoe_texture(style, rng) if style else lay_out(sample_garment_texture(rng), k))
     # drawn from the texture's seed: the subject's other draws stay as they were before grading
     return g if k.footwear else dataclasses.replace(g, grade=sample_grade(np.random.default_rng([g.texture.seed, 11])))
 
@@ -500,7 +537,8 @@ def sample_style(g: GarmentParams, outfit, draw: bool = True) -> GarmentParams:
         pick = int(rng.choice(len(p), p=p / p.sum()))
         if pick:  # a kind with its own cut (a shift's straight skirt) drops a drawn one
             kind = styles[pick - 1].kind
-            g = dataclasses.replace(g, kind=kind, cut=None if GARMENTS[kind].cut or not GARMENTS[kind].skirted else g.cut)
+            g = dataclasses.replace(g, kind=kind, cut=None if GARMENTS[kind].cut or not GARMENTS[kind].skirted else g.cut,
+                                    texture=dataclasses.replace(g.texture, uv_aspect=round(uv_aspect(GARMENTS[kind]), 3)))
     style = _STYLE_OF.get(g.kind)
     return dataclasses.replace(g, texture=style.texture(g.texture, rng)) if style and style.texture else g
 

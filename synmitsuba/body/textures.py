@@ -78,6 +78,8 @@ class GarmentTextureParams(Params):
                       doc="thread-scale normal map: auto takes the garment kind's fabric")
     uv_scale: float = spec(1.0, Number(0.1, 10))
     uv_rotation_deg: float = spec(0.0, Number(-180, 180))
+    uv_aspect: float = spec(1.0, Number(0.2, 5), doc="metres per unit u over metres per unit v where the garment "
+                            "lies: pattern and decal stretched by it along u lie square on the cloth (1: square in uv)")
     uv_offset: list = spec(factory=lambda: [0.0, 0.0], check=Vector(2, -10, 10, "uv"))
     seed: int = spec(0, Number(0, 2 ** 31, integer=True))
 
@@ -93,13 +95,24 @@ def sample_garment_texture(rng: np.random.Generator) -> GarmentTextureParams:
         decal_center=[round(float(x), 3) for x in rng.uniform(0.2, 0.8, 2)],
         decal_size=round(float(rng.uniform(0.05, 0.2)), 3), bump=str(rng.choice(BUMPS)),
         bump_amplitude=round(float(rng.uniform(0.2, 1.0)), 3), bump_scale=round(float(rng.uniform(20, 120)), 3),
-        uv_scale=round(float(rng.uniform(0.7, 2.0)), 3), uv_rotation_deg=round(float(rng.uniform(-45, 45)), 3),
+        uv_scale=round(float(rng.uniform(0.7, 2.0)), 3), uv_rotation_deg=on_grain(float(rng.uniform(-45, 45))),
         uv_offset=[round(float(x), 3) for x in rng.uniform(0, 1, 2)], seed=int(rng.integers(0, 2 ** 31)))
+
+
+GRAIN_SLANT_DEG = 30.0  # a drawn slant under this runs a pattern across the cloth, over it down the cloth
+
+
+def on_grain(slant_deg: float) -> float:
+    """The rotation a pattern drawn at ``slant_deg`` is cut at: along the cloth's grain, 0
+    (stripes across a garment) or 90 degrees (down it), as printed and woven cloth is cut and
+    sewn; never at the slant, which on a garment read as stripes that wander."""
+    return 0.0 if abs(slant_deg) < GRAIN_SLANT_DEG else 90.0
 
 
 def _uv_grid(p: GarmentTextureParams, size: int):
     v, u = (np.mgrid[:size, :size].astype(np.float32) + 0.5) / size
     v = 1 - v  # row 0 is the top of the texture (v = 1)
+    u = u * np.float32(p.uv_aspect)  # metres along u as along v
     a = np.radians(p.uv_rotation_deg)
     x = (np.float32(np.cos(a)) * u - np.float32(np.sin(a)) * v) * np.float32(p.uv_scale) + np.float32(p.uv_offset[0])
     y = (np.float32(np.sin(a)) * u + np.float32(np.cos(a)) * v) * np.float32(p.uv_scale) + np.float32(p.uv_offset[1])
@@ -202,12 +215,13 @@ def _decal_mask(p: GarmentTextureParams, size: int) -> np.ndarray:
     reach = 1.05 * p.decal_size  # every decal lies within its size of its centre (the band: in v only)
     rows = np.arange(max(0, int((1 - p.decal_center[1] - reach) * size) - 2),
                      min(size, int((1 - p.decal_center[1] + reach) * size) + 3))
+    across = reach / p.uv_aspect
     cols = np.arange(size) if p.decal == "band" else \
-        np.arange(max(0, int((p.decal_center[0] - reach) * size) - 2), min(size, int((p.decal_center[0] + reach) * size) + 3))
+        np.arange(max(0, int((p.decal_center[0] - across) * size) - 2), min(size, int((p.decal_center[0] + across) * size) + 3))
     if not len(rows) or not len(cols):
         return out
     u, v = (cols[None, :] + 0.5) / size, 1 - (rows[:, None] + 0.5) / size
-    dx, dy = (u - p.decal_center[0]) / p.decal_size, (v - p.decal_center[1]) / p.decal_size
+    dx, dy = (u - p.decal_center[0]) * p.uv_aspect / p.decal_size, (v - p.decal_center[1]) / p.decal_size
     dx, dy = np.broadcast_arrays(dx, dy)
     r, ang = np.hypot(dx, dy), np.arctan2(dy, dx)
     if p.decal == "circle":  # a ring and a disc

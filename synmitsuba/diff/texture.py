@@ -89,6 +89,7 @@ class ProceduralTexture:
         v, u = (np.mgrid[:size, :size] + 0.5) / size
         v = 1 - v
         self._u, self._v = mi.Float(u.ravel()), mi.Float(v.ravel())
+        u = u * params.uv_aspect  # as body.textures._uv_grid: metres along u as along v
         a = np.radians(params.uv_rotation_deg)
         s = params.uv_scale  # the uv transform before the phase (uv_offset) is added
         self._x0 = mi.Float(((np.cos(a) * u - np.sin(a) * v) * s).ravel())
@@ -143,7 +144,7 @@ class ProceduralTexture:
     def _decal(self, values):
         import drjit as dr
         decal, size, c = self.params.decal, values["decal_size"], values["decal_center"]
-        dx, dy = (self._u - c.x) / size, (self._v - c.y) / size
+        dx, dy = (self._u - c.x) * self.params.uv_aspect / size, (self._v - c.y) / size
         e = 1.0 / (self.size * size)  # one texel, in decal sizes
         r = dr.sqrt(dx * dx + dy * dy + 1e-12)
         if decal == "circle":
