@@ -37,7 +37,7 @@ def test_procedural_texture_is_the_dataset_texture_with_antialiased_edges(sm, pa
     stays close to the area average (a one-texel ramp, not a step)."""
     from synmitsuba.diff.texture import ProceduralTexture
     p = GarmentTextureParams(**{**TRUTH.to_dict(), "pattern": pattern, "decal": decal, "pattern_scale": 6.3,
-                                "uv_scale": 1.3})
+                                "uv_scale": 1.3, "uv_aspect": 1.35})  # as a sampled garment's
     proc = ProceduralTexture(p, 64)
     got = np.array(proc.evaluate(proc.initial()))
     assert got.shape == (64, 64, 3)
@@ -47,7 +47,7 @@ def test_procedural_texture_is_the_dataset_texture_with_antialiased_edges(sm, pa
     fine = render_garment_texture(p, 64 * 8)[0].reshape(64, 8, 64, 8, 3)
     area = fine.mean((1, 3))
     uniform = (np.ptp(fine, axis=(1, 3)) < 1e-6).all(-1)
-    assert uniform.mean() > 0.5
+    assert uniform.mean() > 0.4
     same = (np.abs(got - area).max(-1) < 2e-4)[uniform]
     assert same.mean() > 0.995  # a texel whose 64 subsamples just miss an edge may see the ramp
     assert np.abs(got - area)[~uniform].mean() < 0.06
