@@ -724,6 +724,28 @@ def test_a_print_lies_round_on_the_chest_and_other_kinds_take_none():
         assert drawn.decal == "none" and drawn.uv_aspect != 1.0, (kind, drawn.decal)
 
 
+def test_sampled_garments_lie_on_the_grain_at_their_own_kinds_aspect():
+    """Over 60 sampled subjects: every garment's pattern runs at 0 or 90 degrees, its
+    ``uv_aspect`` is its own kind's (also a kind a style made it into after the draw: a
+    jumpsuit drawn as a dress), and a decal is only on the kinds that print; footwear keeps 1."""
+    from synmitsuba.body.garments import sample_garment, sample_style, uv_aspect
+    from synmitsuba.body.textures import on_grain
+    assert [on_grain(a) for a in (-45.0, -29.9, 0.0, 29.9, 30.0, 45.0)] == [90.0, 0.0, 0.0, 0.0, 90.0, 90.0]
+    kinds = set()
+    for seed in range(60):
+        for g in sm.sample_subject(np.random.default_rng(seed)).garments:
+            k, t = GARMENTS[g.kind], g.texture
+            kinds.add(g.kind)
+            if k.footwear:
+                continue
+            assert t.uv_rotation_deg in (0.0, 90.0) and t.uv_aspect == uv_aspect(k), (seed, g.kind, t)
+            assert t.decal == "none" or k.prints, (seed, g.kind, t.decal)
+    assert {"hoodie", "jeans", "skirt", "tank"} <= kinds, kinds
+    styled = [sample_style(sample_garment("dress", np.random.default_rng(seed)), ["dress"]) for seed in range(40)]
+    assert {"jumpsuit", "shift", "wrap"} <= {g.kind for g in styled}
+    assert all(g.texture.uv_aspect == uv_aspect(GARMENTS[g.kind]) for g in styled)
+
+
 def test_each_kinds_uv_aspect_is_its_mesh_s():
     """``uv_aspect`` (metres per unit u over per unit v) against the built meshes on two bodies:
     over the torso's front for tops (the sleeves' u runs along the arm), the whole mesh for

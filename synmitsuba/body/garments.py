@@ -326,7 +326,7 @@ def lay_out(t: GarmentTextureParams, kind: GarmentKind) -> GarmentTextureParams:
     (``uv_aspect``) and its decal printed on the chest of a kind that ``prints`` (centred, or a
     logo on the left chest; the drawn centre moves a print up or down), dropped on other kinds,
     where a decal drawn anywhere in the uv square came out on a hip, a thigh or a skirt's side."""
-    aspect = round(uv_aspect(kind), 3)
+    aspect = uv_aspect(kind)
     if not kind.prints or t.decal == "none":
         return dataclasses.replace(t, uv_aspect=aspect, decal="none")
     d = t.decal_size
@@ -538,7 +538,7 @@ def sample_style(g: GarmentParams, outfit, draw: bool = True) -> GarmentParams:
         if pick:  # a kind with its own cut (a shift's straight skirt) drops a drawn one
             kind = styles[pick - 1].kind
             g = dataclasses.replace(g, kind=kind, cut=None if GARMENTS[kind].cut or not GARMENTS[kind].skirted else g.cut,
-                                    texture=dataclasses.replace(g.texture, uv_aspect=round(uv_aspect(GARMENTS[kind]), 3)))
+                                    texture=dataclasses.replace(g.texture, uv_aspect=uv_aspect(GARMENTS[kind])))
     style = _STYLE_OF.get(g.kind)
     return dataclasses.replace(g, texture=style.texture(g.texture, rng)) if style and style.texture else g
 

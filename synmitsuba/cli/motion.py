@@ -34,7 +34,7 @@ def preview(args) -> int:
     from synmitsuba.motion.sources import check_motion_source, load_motion
     from synmitsuba.compose.subjects import heeled_roll, retarget_to_subject
     from synmitsuba.body.recipe import SubjectConfig
-    check_motion_source(args.clip, field="CLIP")  # before anything heavy
+    kind, _ = check_motion_source(args.clip, field="CLIP")  # before anything heavy
     try:
         config = SubjectConfig.from_dict({"cloth": "skinned" if args.cloth == "skinned" else "simulated",  # its mesh
                                           **({"outfit": args.outfit.split(",")} if args.outfit else {})}, "config")
@@ -48,7 +48,7 @@ def preview(args) -> int:
     human, rows = None, [None]
     if not args.stick:
         human = sm.build_subject(sm.sample_subject(rng, config))
-        if human.heels:
+        if human.heels and kind == "procedural":  # a file's clip has no roll to scale: not read twice
             motion = load_motion(args.clip, again, seconds=args.seconds, field="CLIP", roll=heeled_roll(human.heels))
         motion = retarget_to_subject(motion, human)
         simulated = sm.simulate_cloth(human, motion) if args.cloth != "skinned" else None
