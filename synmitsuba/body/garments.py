@@ -178,40 +178,41 @@ class GarmentKind:
     material: Callable | None = None  # (params, texture size) -> Material; None: garment_material
     cut: str | None = None        # a flare's cut (SKIRT_CUTS) when the garment names none; None: a_line
     prints: bool = False          # a drawn decal is printed on its chest (other kinds are drawn without one)
+    panels: str | None = None     # its pattern laid on these panels (body.panels.PANEL_LAYOUTS); None: over its uv
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
 GARMENTS: dict[str, GarmentKind] = {
     "tshirt": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.15 + 0.25 * L), (0.2, 0.7),
-                          fabric="jersey", prints=True),
+                          fabric="jersey", prints=True, panels="top"),
     "longsleeve": GarmentKind(Layer.TOP, 0.012, 2, "shell", _top(lambda L: 0.85 + 0.1 * L), (0.3, 0.8),
-                              fabric="jersey", prints=True),
+                              fabric="jersey", prints=True, panels="top"),
     "jacket": GarmentKind(Layer.TOP, 0.03, 4, "shell", _top(lambda L: 0.9 + 0.08 * L), (0.4, 1.0),
-                          (0.005, 0.03), (0.002, 0.01), fabric="twill"),
-    "tank": GarmentKind(Layer.TOP, 0.01, 2, "shell", _tank, (0.25, 0.7), fabric="jersey", prints=True),
+                          (0.005, 0.03), (0.002, 0.01), fabric="twill", panels="top"),
+    "tank": GarmentKind(Layer.TOP, 0.01, 2, "shell", _tank, (0.25, 0.7), fabric="jersey", prints=True, panels="top"),
     "sweater": GarmentKind(Layer.TOP, 0.018, 2, "shell", _top(lambda L: 0.92 + 0.06 * L), (0.45, 0.8),
-                           (0.01, 0.03), (0.004, 0.008), fabric="jersey"),
+                           (0.01, 0.03), (0.004, 0.008), fabric="jersey", panels="top"),
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
     "coat": GarmentKind(Layer.TOP, 0.025, 4, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
                         (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
     "hoodie": GarmentKind(Layer.TOP, 0.016, 2, "shell+hood", _top(lambda L: 0.95 + 0.05 * L), (0.45, 0.8),
-                          (0.01, 0.03), (0.003, 0.006), fabric="jersey", prints=True),
+                          (0.01, 0.03), (0.003, 0.006), fabric="jersey", prints=True, panels="top"),
     "shirt": GarmentKind(Layer.TOP, 0.012, 2, "shell+collar", _top(lambda L: 0.93 + 0.07 * L), (0.4, 0.8),
-                         (0.005, 0.02), (0.002, 0.004), fabric="plain"),
+                         (0.005, 0.02), (0.002, 0.004), fabric="plain", panels="top"),
     # a blazer: a jacket's hip-length bodice, open over the top in a V down to its buttons
     "blazer": GarmentKind(Layer.TOP, 0.025, 4, "shell", _open_front(_top(lambda L: 0.95), BLAZER_V), (0.3, 0.55),
-                          (0.005, 0.02), (0.003, 0.008), fabric="plain"),
+                          (0.005, 0.02), (0.003, 0.008), fabric="plain", panels="top"),
     "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
-                            fabric="twill"),
+                            fabric="twill", panels="bottom"),
     "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
-                              fabric="twill"),
+                              fabric="twill", panels="bottom"),
     "jeans": GarmentKind(Layer.BOTTOM, 0.004, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
-                         (0.0, 0.012), fabric="twill"),
+                         (0.0, 0.012), fabric="twill", panels="bottom"),
     "chinos": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
-                          fabric="twill"),
+                          fabric="twill", panels="bottom"),
     # joggers: jersey, ending gathered above the ankle (their taper and cuffs are not modelled)
     "joggers": GarmentKind(Layer.BOTTOM, 0.008, 1, "shell", _bottom(lambda L: 0.9 + 0.06 * L), (0.0, 1.0),
-                           (0.005, 0.02), (0.002, 0.005), fabric="jersey"),
+                           (0.005, 0.02), (0.002, 0.005), fabric="jersey", panels="bottom"),
     "skirt": GarmentKind(Layer.BOTTOM, 0.006, 3, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
                          tucks_tops=True),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
@@ -225,7 +226,7 @@ GARMENTS: dict[str, GarmentKind] = {
     # a one-piece from the neck to the ankles: a top's torso and sleeves and trousers' legs
     "jumpsuit": GarmentKind(Layer.DRESS, 0.01, 2, "shell", _union(_top(lambda L: 0.1 + 0.8 * L),
                                                                     _bottom(lambda L: 0.9 + 0.12 * L)),
-                            (0.0, 1.0), (0.005, 0.02), fabric="twill", takes_jacket=False),
+                            (0.0, 1.0), (0.005, 0.02), fabric="twill", takes_jacket=False, panels="one_piece"),
     "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none", footwear=True),
     # built round the foot (body/shoes.py); thickness is the sole's height, length the collar's (and shaft's)
     **{name: GarmentKind(Layer.SHOES, ALLOWANCE, 0, "heeled" if SHOE_STYLES[name].heel[1] else "shoe", None,

@@ -26,6 +26,7 @@ from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.skeleton import forward_kinematics
 from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
+from synmitsuba.body.panels import PanelFrame, pattern_coords
 from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.hand_skin import hand_lines
 from synmitsuba.body.skin_detail import face_weights, palm_weights, pore_repeat, translucency_weights
@@ -122,6 +123,7 @@ class LayeredHuman:
                                          body.vertices[self.split.source], self.split.faces, self.split.uv,
                                          body.weights[self.split.source])]
         self.garments: list[GarmentMesh] = []
+        self._panel_frame: PanelFrame | None = None  # built for the first garment laid on panels
         below = 0.0
         tuck = any(GARMENTS[x.kind].tucks_tops for x in recipe.garments)
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
@@ -135,8 +137,7 @@ class LayeredHuman:
             kind = GARMENTS[g.kind]
             skin_with = GARMENT_SHAPES[kind.shape].weights
             weights = skin_with(body, self.regions, m.vertices, b.weights) if skin_with else b.weights
-            material = kind.material(g, size) if kind.material else garment_material(
-                g.texture, size, fabric=kind.fabric, metres_per_uv=metres_per_uv(m.vertices, m.faces, m.uv))
+            material = kind.material(g, size) if kind.material else self._garment_material(m, kind, size)
             collider = GarmentCollider(m.faces, len(m.vertices), body_margin(m.offset), body.faces[b.triangle],
                                        b.barycentric)
             self.parts.append(_Part(g.kind, m.layer, material, m.vertices, m.faces, m.uv, weights, collider))
@@ -158,6 +159,18 @@ class LayeredHuman:
         self._resolve(self.pose(resolve=False), calibrate=True)  # the rest pose is the garments' design
 
     # -- construction ---------------------------------------------------------------------
+    def _garment_material(self, m: GarmentMesh, kind, size: int) -> Material:
+        """A garment's procedural material, its pattern laid on its kind's panels (``body.panels``)
+        when it names a layout, else over its uv."""
+        per_uv = metres_per_uv(m.vertices, m.faces, m.uv)
+        coords = None
+        if kind.panels is not None:
+            if self._panel_frame is None:
+                self._panel_frame = PanelFrame.of(self.body.vertices, self.regions, self.body.skeleton)
+            outer = m.faces[:len(m.faces) - m.hem[0]]  # the hem's turned-in band shares the outer cloth's texels
+            coords = pattern_coords(kind.panels, m.vertices, outer, m.uv, self._panel_frame, size, per_uv[1])
+        return garment_material(m.params.texture, size, fabric=kind.fabric, metres_per_uv=per_uv, pattern_coords=coords)
+
     def _build_head_and_hair(self) -> None:
         body, sk = self.body, self.body.skeleton
         labels = part_labels(body)

@@ -109,10 +109,16 @@ def on_grain(slant_deg: float) -> float:
     return 0.0 if abs(slant_deg) < GRAIN_SLANT_DEG else 90.0
 
 
-def _uv_grid(p: GarmentTextureParams, size: int):
-    v, u = (np.mgrid[:size, :size].astype(np.float32) + 0.5) / size
-    v = 1 - v  # row 0 is the top of the texture (v = 1)
-    u = u * np.float32(p.uv_aspect)  # metres along u as along v
+def _uv_grid(p: GarmentTextureParams, size: int, base: np.ndarray | None = None):
+    """The pattern's coordinates (x, y) per texel: ``base`` (size, size, 2; a garment's panel
+    coordinates, ``body.panels``) or the uv square stretched by ``uv_aspect``, turned, scaled
+    and shifted by the texture's uv transform."""
+    if base is None:
+        v, u = (np.mgrid[:size, :size].astype(np.float32) + 0.5) / size
+        v = 1 - v  # row 0 is the top of the texture (v = 1)
+        u = u * np.float32(p.uv_aspect)  # metres along u as along v
+    else:
+        u, v = base[..., 0].astype(np.float32), base[..., 1].astype(np.float32)
     a = np.radians(p.uv_rotation_deg)
     x = (np.float32(np.cos(a)) * u - np.float32(np.sin(a)) * v) * np.float32(p.uv_scale) + np.float32(p.uv_offset[0])
     y = (np.float32(np.sin(a)) * u + np.float32(np.cos(a)) * v) * np.float32(p.uv_scale) + np.float32(p.uv_offset[1])
@@ -259,9 +265,11 @@ def _height(p: GarmentTextureParams, x, y, size: int) -> np.ndarray:
     return fade * p.bump_amplitude * (h - h.mean())
 
 
-def render_garment_texture(p: GarmentTextureParams, size: int = 256) -> tuple[np.ndarray, np.ndarray]:
-    """(albedo (size, size, 3) float32 linear in [0, 1], height (size, size) float32)."""
-    x, y = _uv_grid(p, size)
+def render_garment_texture(p: GarmentTextureParams, size: int = 256,
+                           base: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(albedo (size, size, 3) float32 linear in [0, 1], height (size, size) float32); pattern
+    and bump over ``base`` (``_uv_grid``), the decal in uv."""
+    x, y = _uv_grid(p, size, base)
     base, pattern, decal = (lab_to_linear_rgb(c).astype(np.float32) for c in (p.base_lab, p.pattern_lab, p.decal_lab))
     m = np.clip(_pattern_mask(p, x, y), 0, 1)[..., None].astype(np.float32) * np.float32(p.pattern_alpha)
     img = base + (pattern - base) * m
@@ -313,19 +321,20 @@ def fabric_repeat(fabric: str, metres_per_uv) -> tuple:
 
 
 def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float = 0.8, fabric: str = "none",
-                     metres_per_uv=(1.0, 1.0)):
-    """The garment's material: albedo and pattern bump at ``size``, and where its fabric (``p.weave``,
-    or ``fabric`` for auto) has one, a thread-scale normal map tiled over the uv square as
-    often as ``metres_per_uv`` (metres of cloth per unit u and v) holds tiles."""
+                     metres_per_uv=(1.0, 1.0), pattern_coords: np.ndarray | None = None):
+    """The garment's material: albedo and pattern bump at ``size`` (the pattern over
+    ``pattern_coords``, its panels, when given), and where its fabric (``p.weave``, or
+    ``fabric`` for auto) has one, a thread-scale normal map tiled over the uv square as often as
+    ``metres_per_uv`` (metres of cloth per unit u and v) holds tiles."""
     from synmitsuba.scene.materials import Material
-    albedo, height = render_garment_texture(p, size)
+    albedo, height = render_garment_texture(p, size, pattern_coords)
     weave = fabric if p.weave == "auto" else p.weave
     normal, repeat = None, (1.0, 1.0)
     if weave != "none":
         normal, repeat = fabric_normal_map(weave), fabric_repeat(weave, metres_per_uv)
     return Material(texture=albedo, bump=height if p.bump != "none" else None, bump_scale=0.002,
                     kind="principled", roughness=roughness, specular=0.3, normal_map=normal,
-                    normal_map_repeat=repeat)
+                    normal_map_repeat=repeat, pattern_coords=pattern_coords)
 
 
 # -- skin ------------------------------------------------------------------------------
@@ -496,14 +505,25 @@ class UVSurface:
     texel: float
 
 
-def uv_surface(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray,
-               size: int) -> UVSurface:
-    """Rasterise ``faces`` into the (size, size) atlas (``uv`` v up, texel centres at i + 0.5 as
-    ``paint_uv`` draws them), interpolating rest positions and normals barycentrically, so a
-    map can be computed from where each texel lies on the body."""
+def rasterise_uv(uv: np.ndarray, face_uv: np.ndarray, size: int) -> tuple[np.ndarray, ...]:
+    """The texel centres (i + 0.5, ``uv`` v up, as ``paint_uv`` draws them) each face covers in a
+    (size, size) atlas: (rows, cols, face, barycentric weights (N, 3)), in face order (a texel
+    two faces cover comes once per face, the later face last). Faces are tried in groups of
+    like size, each over the texel box its largest member needs."""
     tri = np.stack([uv[face_uv][..., 0] * size, (1.0 - uv[face_uv][..., 1]) * size], -1)  # (F, 3, 2) x, y
     lo = np.floor(tri.min(1) - 0.5).astype(np.int64)
-    span = int(np.ceil((tri.max(1) - lo).max())) + 1
+    spans = np.ceil((tri.max(1) - lo).max(1)).astype(np.int64) + 1
+    group = np.ceil(np.log2(np.maximum(spans, 1))).astype(np.int64)
+    out = [_rasterise(tri[sel], lo[sel], int(spans[sel].max()), size, sel)
+           for sel in (np.flatnonzero(group == g) for g in np.unique(group))]
+    rows, cols, faces, w = (np.concatenate([o[k] for o in out]) for k in range(4))
+    order = np.argsort(faces, kind="stable")
+    return rows[order], cols[order], faces[order], w[order]
+
+
+def _rasterise(tri: np.ndarray, lo: np.ndarray, span: int, size: int, index: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``rasterise_uv`` of the triangles ``tri`` (F, 3, 2) in texels, each searched over the
+    ``span`` x ``span`` texels from its ``lo`` corner; faces named by ``index``."""
     oy, ox = np.mgrid[0:span, 0:span]
     px = lo[:, None, 0] + ox.ravel()[None]  # (F, span^2) candidate texels
     py = lo[:, None, 1] + oy.ravel()[None]
@@ -517,16 +537,26 @@ def uv_surface(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray, uv:
     w0 = 1.0 - w1 - w2
     inside = (w0 >= -1e-6) & (w1 >= -1e-6) & (w2 >= -1e-6) & (px >= 0) & (py >= 0) & (px < size) & (py < size)
     f, k = np.nonzero(inside)
-    w = np.stack([w0[f, k], w1[f, k], w2[f, k]], 1)
+    return py[f, k], px[f, k], index[f], np.stack([w0[f, k], w1[f, k], w2[f, k]], 1)
+
+
+def uv_surface(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray,
+               size: int) -> UVSurface:
+    """Rasterise ``faces`` into the (size, size) atlas (``rasterise_uv``), interpolating rest
+    positions and normals barycentrically, so a map can be computed from where each texel lies
+    on the body."""
+    rows, cols, f, w = rasterise_uv(uv, face_uv, size)
     pos = np.einsum("nk,nkd->nd", w, vertices[faces[f]])
     nrm = np.einsum("nk,nkd->nd", w, normals[faces[f]])
     nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
     out = UVSurface(np.zeros((size, size), bool), np.zeros((size, size, 3)), np.zeros((size, size, 3)), 0.0)
-    out.covered[py[f, k], px[f, k]] = True
-    out.position[py[f, k], px[f, k]] = pos
-    out.normal[py[f, k], px[f, k]] = nrm
+    out.covered[rows, cols] = True
+    out.position[rows, cols] = pos
+    out.normal[rows, cols] = nrm
     v = vertices[faces]
     area3 = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
-    area2 = 0.5 * np.abs(det)
+    t = uv[face_uv] * size
+    area2 = 0.5 * np.abs((t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1])
+                         - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0]))
     out.texel = float(np.sqrt(np.median(area3 / np.maximum(area2, 1e-12))))
     return out

@@ -89,9 +89,10 @@ class DiffScene:
 
     def bind_procedural(self, mesh: str, texture) -> list[str]:
         """Replace ``mesh``'s bitmap by the procedural garment texture ``texture``
-        (``GarmentTextureParams``) written in drjit; returns the variable names it adds."""
+        (``GarmentTextureParams``) written in drjit, its pattern over the mesh material's
+        ``pattern_coords`` (a garment's panels) where it has them; returns the variable names it adds."""
         key = self.texture_key(mesh)
-        proc = ProceduralTexture(texture, self.params[key].shape[0])
+        proc = ProceduralTexture(texture, self.params[key].shape[0], self.scene.meshes[mesh].material.pattern_coords)
         self._textures[mesh] = (key, proc)
         return [self._add(f"{mesh}.{k}", VARIABLES[k], v) for k, v in proc.initial().items()]
 

@@ -79,25 +79,34 @@ def _band(t, width, e):
 
 class ProceduralTexture:
     """The garment texture of ``params`` as a drjit function of its ``VARIABLES``, evaluated on
-    the ``size`` x ``size`` texel centres of the bitmap it replaces (row 0 is v = 1)."""
+    the ``size`` x ``size`` texel centres of the bitmap it replaces (row 0 is v = 1), its
+    pattern over ``coords`` (the garment's panels: its material's ``pattern_coords``) when given."""
 
-    def __init__(self, params: GarmentTextureParams, size: int):
+    def __init__(self, params: GarmentTextureParams, size: int, coords: np.ndarray | None = None):
         import mitsuba as mi
         if not isinstance(params, GarmentTextureParams):
             raise ConfigError("texture", type(params).__name__, "give a GarmentTextureParams (a garment's .texture)")
+        if coords is not None and np.shape(coords) != (size, size, 2):
+            raise ConfigError("coords", f"shape {np.shape(coords)}", f"give ({size}, {size}, 2) pattern coordinates "
+                              "(the material's pattern_coords) or None")
         self.params, self.size = params, int(size)
         v, u = (np.mgrid[:size, :size] + 0.5) / size
         v = 1 - v
         self._u, self._v = mi.Float(u.ravel()), mi.Float(v.ravel())
-        u = u * params.uv_aspect  # as body.textures._uv_grid: metres along u as along v
-        a = np.radians(params.uv_rotation_deg)
         s = params.uv_scale  # the uv transform before the phase (uv_offset) is added
+        if coords is None:
+            u = u * params.uv_aspect  # as body.textures._uv_grid: metres along u as along v
+            step = np.full(u.shape, 1.0 / size)  # one texel in the pattern's coordinates
+        else:  # a garment's panels (body.panels): a texel spans what its coordinates change by
+            u, v = coords[..., 0].astype(np.float64), coords[..., 1].astype(np.float64)
+            step = np.maximum(*(np.hypot(*np.gradient(c)) for c in (u, v)))
+        a = np.radians(params.uv_rotation_deg)
         self._x0 = mi.Float(((np.cos(a) * u - np.sin(a) * v) * s).ravel())
         self._y0 = mi.Float(((np.sin(a) * u + np.cos(a) * v) * s).ravel())
-        self._texel = s / size  # one texel in the transformed coordinates
+        self._texel = mi.Float((step * s).ravel())  # one texel in the transformed coordinates
         self._camouflage = None
         if params.pattern == "camouflage":
-            x, y = _uv_grid(params, size)
+            x, y = _uv_grid(params, size, coords)
             self._camouflage = mi.Float(np.clip(_pattern_mask(params, x, y), 0, 1).ravel())
 
     def initial(self) -> dict:

@@ -84,6 +84,8 @@ class Material:
     strand_melanin: np.ndarray | None = None
     translucency: np.ndarray | None = None
     name: str = ""
+    pattern_coords: np.ndarray | None = None  # (H, W, 2): where a garment's pattern was drawn per texel
+    # (body.panels; not rendered: diff.ProceduralTexture redraws the texture over the same coordinates)
 
     def __post_init__(self):
         self.base_color = _rgb("material.base_color", self.base_color)
