@@ -58,7 +58,7 @@ def garment_rows(h, size: int) -> list:
         per_v = metres_per_uv(mesh.vertices, mesh.faces, mesh.uv)[1]
         t = dataclasses.replace(mesh.params.texture, uv_rotation_deg=0.0, uv_scale=1.0, uv_offset=[0.0, 0.0])
         before = np.stack(_uv_grid(t, size), -1).astype(np.float64) * per_v
-        now = part.material.pattern_coords.astype(np.float64) * per_v
+        now = part.material.pattern_coords.astype(np.float64)
         rows.append({"kind": mesh.params.kind, **{name: measure(*jacobians(surface.position, C, surface.covered), h.regions)
                                                   for name, C in (("panels", now), ("uv", before))}})
     return rows

@@ -1,6 +1,6 @@
 """docs/patterns.png: patterned garments on their panels (``body.panels``), front, side and back:
-checks, stripes and plaid on tops, trousers and a jumpsuit (each garment's drawn texture with
-its pattern, scale and colours set so the grain shows).
+checks, stripes and plaid on tops, trousers, a skirt, a dress and a jumpsuit (each garment's
+drawn texture with its pattern, scale (per metre) and colours set so the grain shows).
 
     python bench/patterns_sheet.py [--out docs/patterns.png] [--spp 24] [--size 1024]
 """
@@ -13,7 +13,8 @@ import numpy as np
 
 # (outfit, {garment kind: pattern}) per row
 ROWS = ((("tshirt", "trousers", "sneakers"), {"tshirt": "checks", "trousers": "stripes"}),
-        (("longsleeve", "jeans", "boots"), {"longsleeve": "stripes"}),
+        (("longsleeve", "skirt", "boots"), {"longsleeve": "stripes", "skirt": "checks"}),
+        (("dress", "sandals"), {"dress": "plaid"}),
         (("shirt", "chinos", "dress_shoes"), {"shirt": "plaid", "chinos": "checks"}),
         (("hoodie", "joggers", "sneakers"), {"hoodie": "checks", "joggers": "plaid"}),
         (("jumpsuit", "sneakers"), {"jumpsuit": "checks"}))
@@ -26,7 +27,7 @@ def patterned(recipe, patterns: dict):
     for g in recipe.garments:
         if g.kind in patterns:
             g = dataclasses.replace(g, texture=dataclasses.replace(
-                g.texture, pattern=patterns[g.kind], pattern_scale=14.0, pattern_width=0.25, pattern_alpha=1.0,
+                g.texture, pattern=patterns[g.kind], pattern_scale=7.0, pattern_width=0.25, pattern_alpha=1.0,
                 uv_rotation_deg=0.0, base_lab=[82.0, 0.0, 5.0], pattern_lab=[30.0, 15.0, -40.0], bump="none",
                 decal="none"))
         garments.append(g)

@@ -194,7 +194,7 @@ GARMENTS: dict[str, GarmentKind] = {
                            (0.01, 0.03), (0.004, 0.008), fabric="jersey", panels="top"),
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
     "coat": GarmentKind(Layer.TOP, 0.025, 4, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
-                        (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight"),
+                        (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight", panels="dress"),
     "hoodie": GarmentKind(Layer.TOP, 0.016, 2, "shell+hood", _top(lambda L: 0.95 + 0.05 * L), (0.45, 0.8),
                           (0.01, 0.03), (0.003, 0.006), fabric="jersey", prints=True, panels="top"),
     "shirt": GarmentKind(Layer.TOP, 0.012, 2, "shell+collar", _top(lambda L: 0.93 + 0.07 * L), (0.4, 0.8),
@@ -214,15 +214,15 @@ GARMENTS: dict[str, GarmentKind] = {
     "joggers": GarmentKind(Layer.BOTTOM, 0.008, 1, "shell", _bottom(lambda L: 0.9 + 0.06 * L), (0.0, 1.0),
                            (0.005, 0.02), (0.002, 0.005), fabric="jersey", panels="bottom"),
     "skirt": GarmentKind(Layer.BOTTOM, 0.006, 3, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
-                         tucks_tops=True),
+                         tucks_tops=True, panels="skirt"),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
-                         (0.005, 0.03), skirted=True, takes_jacket=False),
+                         (0.005, 0.03), skirted=True, takes_jacket=False, panels="dress"),
     # a shift: sleeveless, straight, to the knees; a wrap: a V neckline, elbow sleeves, flared
     "shift": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: -0.1, dress=True), (0.3, 0.6),
-                         (0.005, 0.02), skirted=True, takes_jacket=False, cut="straight"),
+                         (0.005, 0.02), skirted=True, takes_jacket=False, cut="straight", panels="dress"),
     "wrap": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _open_front(_top(lambda L: 0.3 + 0.2 * L, dress=True),
                                                                         WRAP_V), (0.35, 0.9), (0.005, 0.03),
-                        skirted=True, takes_jacket=False),
+                        skirted=True, takes_jacket=False, panels="dress"),
     # a one-piece from the neck to the ankles: a top's torso and sleeves and trousers' legs
     "jumpsuit": GarmentKind(Layer.DRESS, 0.01, 2, "shell", _union(_top(lambda L: 0.1 + 0.8 * L),
                                                                     _bottom(lambda L: 0.9 + 0.12 * L)),
@@ -309,9 +309,10 @@ def sample_footwear(shoes: GarmentParams, outfit) -> GarmentParams:
 CHEST_UV = (0.377, 0.72)
 LOGO_UV = (0.045, 0.02)  # a logo sits on the left chest: 9 cm across from the centre line, 3 cm up
 LOGO_SIZE = 0.08         # a drawn decal size under this is a logo (3-4 cm), over it a chest print (6-12 cm)
-# Metres per unit u over per unit v on a kind's mesh (tests/test_subject.py measures them): the
-# body's uv atlas, over the torso's front and the legs alike (1.25-1.5 by body; the chest's 1.47),
-# a skirt's own uv round and down its flare, a dress's bodice and longer flare together.
+# Metres per unit u over per unit v on a kind's mesh, as measured before patterns went on panels
+# (body.panels): the body's uv atlas (1.25-1.5 by body; the chest's 1.47), a skirt's own uv, a
+# dress's bodice and flare. Only a decal reads it now: a print on the chest (tests/test_subject.py
+# measures the atlas's); a sampled recipe still records its kind's.
 UV_ASPECTS = {"body": 1.35, "skirt": 1.9, "dress": 2.7}
 
 
@@ -584,14 +585,18 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, 
         out = radius + _folds(cut, ang, float(np.clip((top_y - h - cut.stitched) / ramp, 0, 1)))
         rings.append(np.column_stack([centre[0] + out * d[:, 0], np.full(n_seg, h), centre[1] + out * d[:, 1]]))
     verts = np.concatenate(rings)
+    seam = len(verts) + np.arange(len(heights))  # each ring's first point again, at u = 1, last
     faces = []
     for k in range(len(heights) - 1):
         for j in range(n_seg):
-            a, b = k * n_seg + j, k * n_seg + (j + 1) % n_seg
-            c, e = a + n_seg, b + n_seg
+            a, b = k * n_seg + j, (k * n_seg + j + 1 if j + 1 < n_seg else seam[k])
+            c, e = a + n_seg, (b + n_seg if j + 1 < n_seg else seam[k + 1])
             faces += [[a, c, b], [b, c, e]]
-    uv = np.column_stack([np.tile(ang / (2 * np.pi), len(heights)), np.repeat(np.linspace(1, 0, len(heights)), n_seg)])
-    return verts, np.array(faces), uv
+    v_of = np.linspace(1, 0, len(heights))
+    uv = np.column_stack([np.tile(ang / (2 * np.pi), len(heights)), np.repeat(v_of, n_seg)])
+    # the seam's own copies: a face closing the ring ran its uv back across the whole square
+    return (np.concatenate([verts, verts[::n_seg]]), np.array(faces),
+            np.concatenate([uv, np.column_stack([np.ones(len(heights)), v_of])]))
 
 
 def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
@@ -701,9 +706,12 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
 
 
 def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float, density: int = 1):
-    """A bodice (a shell) and a skirt flaring from the hips (``density``: see ``_flare``)."""
+    """A bodice (a shell) and a skirt flaring from the hips (``density``: see ``_flare``), the
+    skirt's uv squeezed under the bodice's in the atlas (where the legs' would be), so the two
+    share no texel and each can take its own pattern."""
     v, f, uv = _shell_shape(body, r, split, g, cut, offset)
     sv, sf, suv = _flare(body, r, g, offset, r.hip_y, density)
+    suv = suv * [1.0, max(uv[:, 1].min() - 0.02, 0.1)]
     return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
 
 
@@ -794,12 +802,18 @@ def _hood(r: BodyRegions, v: np.ndarray, f: np.ndarray, n_seg: int = 40, n_down:
     return _strip(r, ang, rings)
 
 
+NECK_PART_UV = ((0.69, 0.23), (0.97, 0.74))  # where a collar's or hood's uv goes: in the atlas's head, which no top covers
+
+
 def _shell_and(neck_part: Callable) -> Callable:
     """A shape: the shell to the neckline and ``neck_part(regions, v, f)`` built on it (a
-    shirt's collar, a hoodie's hood)."""
+    shirt's collar, a hoodie's hood), the part's uv moved into ``NECK_PART_UV`` (its strip's
+    own uv lay over the wrists' in the atlas, where long sleeves end)."""
     def shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
         v, f, uv = _shell_shape(body, r, split, g, cut, offset)
         pv, pf, puv = neck_part(r, v, f)
+        lo, hi = np.array(NECK_PART_UV)
+        puv = lo + (puv - puv.min(0)) / np.maximum(np.ptp(puv, axis=0), 1e-9) * (hi - lo)
         return np.concatenate([v, pv]), np.concatenate([f, pf + len(v)]), np.concatenate([uv, puv])
     return shape
 

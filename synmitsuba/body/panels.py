@@ -8,13 +8,14 @@ the garment's rest mesh is cut into panels (``PANEL_LAYOUTS``, named by its kind
   armhole (a plane fitted where the body's arm skin meets its torso; its seam underneath),
   and a collar or hood above the neck's base (its seam in front);
 - trousers' two legs (seams at the centre front and back, the inseam inside each);
-- a jumpsuit's top above the waist, trouser legs below it.
+- a jumpsuit's top above the waist, trouser legs below it;
+- a skirt, and a dress's or coat's skirt below the hips, in one piece round, its seam at the back.
 Each panel is laid flat with its grain up (``flatten``: two Poisson solves that fit unit
 gradients along and across the grain), cut open along its seam where it goes round, and
 shifted so v is height (stripes meet at the side seams) and u is 0 on the torso's centre lines.
 Each texel takes the panel its own rest position falls in (seams run smooth across faces).
-Coordinates are in units of the garment uv's metres per unit v, so a pattern's
-``pattern_scale`` repeats as often over the garment as it did in uv.
+Coordinates are in metres, so a pattern's ``pattern_scale`` is its repeats per metre of cloth
+on every such garment (over a garment's uv square it was 0.4 m of a skirt, 2 m of a top).
 """
 from __future__ import annotations
 
@@ -68,16 +69,19 @@ class _Limb:
 class PanelFrame:
     """What a rest body gives every garment's panels: where the torso's sides are (``heights``,
     ``depth``: the middle of its depth there, z), the sleeves and legs (L then R), the neck (its
-    seam in front), its axis (x, z) and base height, the waist's height and the body's middle x."""
+    seam in front) and a skirt (round the hips, its seam at the back), the neck's axis (x, z)
+    and base height, the waist's and hips' heights and the body's middle x."""
 
     heights: np.ndarray
     depth: np.ndarray
     sleeves: tuple[_Limb, _Limb]
     legs: tuple[_Limb, _Limb]
     neck: _Limb
+    skirt: _Limb
     neck_xz: np.ndarray
     neck_y: float
     waist_y: float
+    hip_y: float
     mid_x: float
 
     @classmethod
@@ -106,8 +110,11 @@ class PanelFrame:
             legs.append(_Limb(leg_joints, np.array([sign, 0.0, 0.0])))
         nx, nz = regions.neck_xz
         neck = _Limb(np.array([[nx, regions.neck_y, nz], [nx, regions.neck_y + 0.3, nz]]), np.array([0.0, 0.0, -1.0]))
-        return cls(np.array(heights), np.array(depth), (sleeves[0], sleeves[1]), (legs[0], legs[1]), neck,
-                   np.asarray(regions.neck_xz), float(regions.neck_y), float(regions.waist_y), float(torso[:, 0].mean()))
+        mid_x, hips = float(torso[:, 0].mean()), float(np.interp(regions.hip_y, heights, depth))
+        skirt = _Limb(np.array([[mid_x, regions.hip_y, hips], [mid_x, 0.0, hips]]), np.array([0.0, 0.0, 1.0]))
+        return cls(np.array(heights), np.array(depth), (sleeves[0], sleeves[1]), (legs[0], legs[1]), neck, skirt,
+                   np.asarray(regions.neck_xz), float(regions.neck_y), float(regions.waist_y), float(regions.hip_y),
+                   mid_x)
 
 
 def _unit(v) -> np.ndarray:
@@ -115,7 +122,7 @@ def _unit(v) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-TORSO_FRONT, TORSO_BACK, NECK, SLEEVE_L, SLEEVE_R, LEG_L, LEG_R = range(7)
+TORSO_FRONT, TORSO_BACK, NECK, SLEEVE_L, SLEEVE_R, LEG_L, LEG_R, FLARE = range(8)
 
 
 def top_panels(p: np.ndarray, frame: PanelFrame) -> np.ndarray:
@@ -141,9 +148,20 @@ def one_piece_panels(p: np.ndarray, frame: PanelFrame) -> np.ndarray:
     return np.where(p[:, 1] >= frame.waist_y, top_panels(p, frame), bottom_panels(p, frame))
 
 
+def skirt_panels(p: np.ndarray, frame: PanelFrame) -> np.ndarray:
+    """A skirt: one piece round the body, its seam at the back."""
+    return np.full(len(p), FLARE)
+
+
+def dress_panels(p: np.ndarray, frame: PanelFrame) -> np.ndarray:
+    """A dress or a coat: a top's panels over a skirt from the hips (where its flare starts)."""
+    return np.where(p[:, 1] >= frame.hip_y, top_panels(p, frame), FLARE)
+
+
 # garment kinds' layouts are named in body.garments.GarmentKind.panels
 PANEL_LAYOUTS: dict[str, Callable[[np.ndarray, PanelFrame], np.ndarray]] = {
-    "top": top_panels, "bottom": bottom_panels, "one_piece": one_piece_panels,
+    "top": top_panels, "bottom": bottom_panels, "one_piece": one_piece_panels, "skirt": skirt_panels,
+    "dress": dress_panels,
 }
 
 
@@ -237,7 +255,7 @@ def panel_corners(layout: str, vertices: np.ndarray, faces: np.ndarray, uv: np.n
 def _tube(panel: int, frame: PanelFrame) -> _Limb | None:
     """The frame a panel goes round (its seam at +-pi), None for a torso's front or back."""
     return {SLEEVE_L: frame.sleeves[0], SLEEVE_R: frame.sleeves[1], LEG_L: frame.legs[0], LEG_R: frame.legs[1],
-            NECK: frame.neck}.get(panel)
+            NECK: frame.neck, FLARE: frame.skirt}.get(panel)
 
 
 def _cut_open(f: np.ndarray, keep: np.ndarray, angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -283,9 +301,9 @@ def _placed(uv: np.ndarray, v: np.ndarray, panel: int, frame: PanelFrame) -> np.
 
 
 def pattern_coords(layout: str, vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, frame: PanelFrame,
-                   size: int, metres_per_v: float) -> np.ndarray:
-    """(size, size, 2) float32 panel coordinates of each texel of a garment's uv (row 0 at v = 1),
-    in units of ``metres_per_v``: each texel on the panel its own rest position falls in (so a
+                   size: int) -> np.ndarray:
+    """(size, size, 2) float32 panel coordinates in metres of each texel of a garment's uv (row
+    0 at v = 1): each texel on the panel its own rest position falls in (so a
     seam runs smooth across faces, not along their edges), where that panel reaches its face,
     else on its face's panel. A texel no face covers takes its nearest covered texel's (so
     filtering at an island's edge draws no seam)."""
@@ -304,7 +322,7 @@ def pattern_coords(layout: str, vertices: np.ndarray, faces: np.ndarray, uv: np.
         at[on] = np.einsum("nk,nkd->nd", w[on], corners[f[on]])
     out = np.zeros((size, size, 2))
     covered = np.zeros((size, size), bool)
-    out[rows, cols] = at / metres_per_v
+    out[rows, cols] = at
     covered[rows, cols] = True
     if covered.any() and not covered.all():
         r, c = distance_transform_edt(~covered, return_distances=False, return_indices=True)

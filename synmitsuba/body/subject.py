@@ -168,7 +168,7 @@ class LayeredHuman:
             if self._panel_frame is None:
                 self._panel_frame = PanelFrame.of(self.body.vertices, self.regions, self.body.skeleton)
             outer = m.faces[:len(m.faces) - m.hem[0]]  # the hem's turned-in band shares the outer cloth's texels
-            coords = pattern_coords(kind.panels, m.vertices, outer, m.uv, self._panel_frame, size, per_uv[1])
+            coords = pattern_coords(kind.panels, m.vertices, outer, m.uv, self._panel_frame, size)
         return garment_material(m.params.texture, size, fabric=kind.fabric, metres_per_uv=per_uv, pattern_coords=coords)
 
     def _build_head_and_hair(self) -> None:

@@ -64,7 +64,8 @@ class GarmentTextureParams(Params):
     base_lab: list = spec(factory=lambda: [50.0, 0.0, 0.0], check=LAB)
     pattern: str = spec("none", Choice(PATTERNS))
     pattern_lab: list = spec(factory=lambda: [20.0, 0.0, 0.0], check=LAB)
-    pattern_scale: float = spec(8.0, Number(1, 64), doc="repeats across the UV square")
+    pattern_scale: float = spec(8.0, Number(1, 64), doc="repeats across the UV square (per metre of cloth on a "
+                                "garment laid on panels: body.panels)")
     pattern_width: float = spec(0.3, Number(0.05, 0.95), doc="fraction of a period in the pattern colour")
     pattern_alpha: float = spec(1.0, Number(0, 1))
     decal: str = spec("none", Choice(DECALS))
@@ -245,7 +246,9 @@ def _decal_mask(p: GarmentTextureParams, size: int) -> np.ndarray:
     return out
 
 
-def _height(p: GarmentTextureParams, x, y, size: int) -> np.ndarray:
+def _height(p: GarmentTextureParams, x, y, size: int, step=None) -> np.ndarray:
+    """The bump's relief over pattern coordinates (x, y), faded out where a period spans under 6
+    texels; ``step``: the coordinates' change per texel (default: the uv square's, 1 / size)."""
     s = p.bump_scale
     if p.bump == "knit":
         h = np.abs(np.sin(np.pi * x * s)) * (0.5 + 0.5 * np.cos(2 * np.pi * y * s * 2))
@@ -260,7 +263,8 @@ def _height(p: GarmentTextureParams, x, y, size: int) -> np.ndarray:
         h = np.where(over, np.sqrt(np.abs(np.sin(np.pi * x * s))), 0.8 * np.sqrt(np.abs(np.sin(np.pi * y * s))))
     else:
         return np.zeros_like(x)
-    texels = size / max(s * 2 * p.uv_scale, 1e-9)  # texels per period of the finest term
+    texels = 1.0 / (np.maximum(1.0 / size if step is None else step, 1e-9) * max(s * 2 * p.uv_scale, 1e-9))
+    # texels per period of the finest term
     fade = np.clip((texels - 2.0) / 4.0, 0.0, 1.0)  # under 6 texels a period: fade out rather than alias
     return fade * p.bump_amplitude * (h - h.mean())
 
@@ -270,12 +274,13 @@ def render_garment_texture(p: GarmentTextureParams, size: int = 256,
     """(albedo (size, size, 3) float32 linear in [0, 1], height (size, size) float32); pattern
     and bump over ``base`` (``_uv_grid``), the decal in uv."""
     x, y = _uv_grid(p, size, base)
-    base, pattern, decal = (lab_to_linear_rgb(c).astype(np.float32) for c in (p.base_lab, p.pattern_lab, p.decal_lab))
+    step = None if base is None else np.maximum(*(np.hypot(*np.gradient(base[..., k])) for k in (0, 1)))
+    ground, pattern, decal = (lab_to_linear_rgb(c).astype(np.float32) for c in (p.base_lab, p.pattern_lab, p.decal_lab))
     m = np.clip(_pattern_mask(p, x, y), 0, 1)[..., None].astype(np.float32) * np.float32(p.pattern_alpha)
-    img = base + (pattern - base) * m
+    img = ground + (pattern - ground) * m
     d = np.clip(_decal_mask(p, size), 0, 1)[..., None]
     img += (decal - img) * d
-    return img.astype(np.float32), _height(p, x, y, size).astype(np.float32)
+    return img.astype(np.float32), _height(p, x, y, size, step).astype(np.float32)
 
 
 def fabric_height(fabric: str, size: int = 64) -> np.ndarray:
