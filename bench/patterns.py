@@ -15,21 +15,13 @@ Prints JSON: per garment kind and over all, panels against uv, and the ratio.
 import argparse
 import dataclasses
 import json
+import os
+import sys
 
 import numpy as np
 
-
-def jacobians(P, C, covered):
-    """(J (N, 3, 2), positions (N, 3)) over texels whose right and lower neighbours are covered
-    and on the same panel (the pattern moves under 3 texels' worth)."""
-    Pu, Pv = P[:-1, 1:] - P[:-1, :-1], P[1:, :-1] - P[:-1, :-1]
-    Cu, Cv = C[:-1, 1:] - C[:-1, :-1], C[1:, :-1] - C[:-1, :-1]
-    ok = covered[:-1, :-1] & covered[:-1, 1:] & covered[1:, :-1]
-    step = max(np.median(np.linalg.norm(Pu[ok], axis=1)), np.median(np.linalg.norm(Pv[ok], axis=1)))
-    ok &= (np.linalg.norm(Cu, axis=-1) < 3 * step) & (np.linalg.norm(Cv, axis=-1) < 3 * step)
-    Cm = np.stack([Cu[ok], Cv[ok]], -1)
-    good = np.abs(np.linalg.det(Cm)) > 1e-14
-    return np.stack([Pu[ok], Pv[ok]], -1)[good] @ np.linalg.inv(Cm[good]), P[:-1, :-1][ok][good]
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from reference import pattern_jacobians  # noqa: E402  (tests/reference.py: the independent measure)
 
 
 def measure(J, pos, regions) -> dict:
@@ -59,7 +51,7 @@ def garment_rows(h, size: int) -> list:
         t = dataclasses.replace(mesh.params.texture, uv_rotation_deg=0.0, uv_scale=1.0, uv_offset=[0.0, 0.0])
         before = np.stack(_uv_grid(t, size), -1).astype(np.float64) * per_v
         now = part.material.pattern_coords.astype(np.float64)
-        rows.append({"kind": mesh.params.kind, **{name: measure(*jacobians(surface.position, C, surface.covered), h.regions)
+        rows.append({"kind": mesh.params.kind, **{name: measure(*pattern_jacobians(surface.position, C, surface.covered), h.regions)
                                                   for name, C in (("panels", now), ("uv", before))}})
     return rows
 
@@ -67,7 +59,10 @@ def garment_rows(h, size: int) -> list:
 def summarise(rows: list) -> dict:
     out = {}
     for name in ("panels", "uv"):
-        out[name] = {k: round(float(np.nanmedian([r[name][k] for r in rows])), 3) for k in rows[0][name]}
+        out[name] = {}
+        for k in rows[0][name]:
+            values = [r[name][k] for r in rows if np.isfinite(r[name][k])]  # tilt: tops only
+            out[name][k] = round(float(np.median(values)), 3) if values else None
     out["stretch_excess_ratio"] = round((out["uv"]["stretch"] - 1) / max(out["panels"]["stretch"] - 1, 1e-9), 1)
     return out
 

@@ -100,3 +100,18 @@ def uv_to_rest(v: np.ndarray, f: np.ndarray, uv: np.ndarray, q: np.ndarray) -> n
         return None
     k = hit[0]
     return (1 - l1[k] - l2[k]) * v[f[k, 0]] + l1[k] * v[f[k, 1]] + l2[k] * v[f[k, 2]]
+
+
+def pattern_jacobians(P: np.ndarray, C: np.ndarray, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where a texture's pattern lies on the cloth, by finite differences between texels: per
+    texel whose right and lower neighbours are covered and on its own panel (the pattern moves
+    under 3 texels' worth), J (N, 3, 2), the rest surface ``P`` (S, S, 3) moved per metre of
+    pattern ``C`` (S, S, 2) along u and v, and the texel's position (N, 3)."""
+    Pu, Pv = P[:-1, 1:] - P[:-1, :-1], P[1:, :-1] - P[:-1, :-1]
+    Cu, Cv = C[:-1, 1:] - C[:-1, :-1], C[1:, :-1] - C[:-1, :-1]
+    ok = covered[:-1, :-1] & covered[:-1, 1:] & covered[1:, :-1]
+    step = max(np.median(np.linalg.norm(Pu[ok], axis=1)), np.median(np.linalg.norm(Pv[ok], axis=1)))
+    ok &= (np.linalg.norm(Cu, axis=-1) < 3 * step) & (np.linalg.norm(Cv, axis=-1) < 3 * step)
+    Cm = np.stack([Cu[ok], Cv[ok]], -1)
+    good = np.abs(np.linalg.det(Cm)) > 1e-14
+    return np.stack([Pu[ok], Pv[ok]], -1)[good] @ np.linalg.inv(Cm[good]), P[:-1, :-1][ok][good]

@@ -8,6 +8,7 @@ import synmitsuba as sm
 from synmitsuba.body.garments import GARMENTS
 from synmitsuba.body.textures import rasterise_uv, uv_surface
 from synmitsuba.geometry import vertex_normals
+from reference import pattern_jacobians
 
 SIZE = 256
 
@@ -34,20 +35,6 @@ def texel_maps(h, part):
     return surface.position, part.material.pattern_coords.astype(np.float64), surface.covered
 
 
-def jacobians(P, C, covered):
-    """Per texel whose right and lower neighbours are covered and lie on its own panel (the
-    pattern moves less than 3 texels' worth): J (N, 3, 2), the rest surface's change per metre
-    of pattern along u and v, and the texel's position."""
-    Pu, Pv = P[:-1, 1:] - P[:-1, :-1], P[1:, :-1] - P[:-1, :-1]
-    Cu, Cv = C[:-1, 1:] - C[:-1, :-1], C[1:, :-1] - C[:-1, :-1]
-    ok = covered[:-1, :-1] & covered[:-1, 1:] & covered[1:, :-1]
-    step = max(np.median(np.linalg.norm(Pu[ok], axis=1)), np.median(np.linalg.norm(Pv[ok], axis=1)))
-    ok &= (np.linalg.norm(Cu, axis=-1) < 3 * step) & (np.linalg.norm(Cv, axis=-1) < 3 * step)
-    Cm = np.stack([Cu[ok], Cv[ok]], -1)
-    good = np.abs(np.linalg.det(Cm)) > 1e-14
-    return np.stack([Pu[ok], Pv[ok]], -1)[good] @ np.linalg.inv(Cm[good]), P[:-1, :-1][ok][good]
-
-
 @pytest.mark.parametrize("kind", ["tshirt", "trousers", "jumpsuit", "hoodie"])
 def test_a_pattern_lies_square_and_true_to_size_on_its_panels(dressed, kind):
     """A square of the pattern is a square on the cloth, of its size in metres: the map from
@@ -55,7 +42,7 @@ def test_a_pattern_lies_square_and_true_to_size_on_its_panels(dressed, kind):
     and 30 % in nine in ten (the body's atlas: 36-75 % and 83-196 %; a hoodie, pinched under
     its arms and round its hood: 12 % and 80 %), and its scale is 1 within 5 % in the median,
     0.9-1.3 in eight in ten (the atlas: 0.1-1.1)."""
-    J, _ = jacobians(*texel_maps(*dressed[kind]))
+    J, _ = pattern_jacobians(*texel_maps(*dressed[kind]))
     s = np.linalg.svd(J, compute_uv=False)
     stretch, scale = s[:, 0] / s[:, 1], np.sqrt(s[:, 0] * s[:, 1])
     median, p90 = (1.12, 1.8) if kind == "hoodie" else (1.1, 1.3)
@@ -68,7 +55,7 @@ def test_stripes_run_level_round_the_torso_and_round_the_sleeves(dressed):
     waist and armpits, away from the sleeves): within 6 degrees of horizontal in nine texels in
     ten; and round each sleeve, square to the arm within 10 degrees."""
     h, part = dressed["hoodie"]
-    J, pos = jacobians(*texel_maps(h, part))
+    J, pos = pattern_jacobians(*texel_maps(h, part))
     along = J[:, :, 0] / np.linalg.norm(J[:, :, 0], axis=1, keepdims=True)
     r = h.regions
     torso = (pos[:, 1] > r.waist_y) & (pos[:, 1] < r.shoulder[1] - 0.12) & \
