@@ -10,8 +10,9 @@ then a procedural motion kind is drawn, retargeted to it and simulated for ``--s
 (after the stage's own settling). Logged per clip: what was worn and done, whether the
 simulation finished (or the ``ClothError`` / other exception it raised, with the garment and
 frame), every vertex finite, the largest distance of a simulated vertex from the same garment
-skinned and the largest step of a vertex between frames (an exploding vertex shows in both),
-and the seconds. Prints a JSON summary of the whole log.
+skinned and the largest step of a vertex between frames (an exploding vertex shows in both;
+the stage raises ``ClothError`` past ``ClothSettings.max_drift``, 1 m), and the seconds.
+Prints a JSON summary of the whole log (clips over half a metre in either: worth a look).
 
     python bench/cloth_stability.py [--clips 1000] [--seconds 1.0] [--log bench/cloth_stability.jsonl]
                                     [--until SECONDS]   # stop starting clips after this long
@@ -24,7 +25,7 @@ import time
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-EXPLODED = 0.5  # metres from the skinned garment (or in one frame) that count as an exploding vertex
+FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
 def draw_clip(k: int, seconds: float):
@@ -81,10 +82,10 @@ def read_log(path: str) -> list[dict]:
 
 def summary(rows: list[dict]) -> dict:
     ok = [r for r in rows if r["status"] == "ok"]
-    bad = [r for r in ok if not r["finite"] or r["max_drift_m"] > EXPLODED or r["max_step_m"] > EXPLODED]
+    far = [r for r in ok if r["max_drift_m"] > FAR or r["max_step_m"] > FAR]
     failed = [r for r in rows if r["status"] != "ok"]
     return {"bench": "cloth_stability", "clips": len(rows), "finished": len(ok), "non_finite": sum(not r["finite"] for r in ok),
-            "exploding": len(bad), "raised": len(failed), "raised_examples": [
+            "over_half_a_metre": len(far), "raised": len(failed), "raised_examples": [
                 {k: r.get(k) for k in ("clip", "garments", "motion", "status", "garment", "frame")} for r in failed[:5]],
             "max_drift_m": max((r["max_drift_m"] for r in ok), default=None),
             "max_step_m": max((r["max_step_m"] for r in ok), default=None),
