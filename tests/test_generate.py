@@ -233,10 +233,14 @@ def test_ray_writes_the_same_files_as_the_local_pool(tiny, tmp_path):
 
 def _quick_task(config, index, out):
     """A stand-in sequence (the orchestration is under test, not rendering): sequence 1 raises,
-    sequence 4 kills its worker process, the others finish after a short while."""
+    sequence 2's cloth diverges, sequence 4 kills its worker process, the others finish after a
+    short while."""
+    from synmitsuba.cloth.simulate import ClothError
     time.sleep(0.3)
     if index == 1:
         raise ValueError(f"sequence {index} cannot be composed")
+    if index == 2:
+        raise ClothError("skirt", 16, "a vertex 1.08 m from the skinned garment")
     if index == 4:
         os._exit(3)
     name = f"seq_{index:06d}"
@@ -247,22 +251,25 @@ def _quick_task(config, index, out):
 
 def test_failures_are_logged_with_tracebacks_and_charged_to_their_own_sequence(tmp_path):
     """Two workers, six sequences: the one that raises and the one whose worker dies are each
-    tried max_failures + 1 times with every traceback in run.log; a pool that broke under two
-    running sequences charges neither until one breaks a pool alone; the rest complete once."""
+    tried max_failures + 1 times with every traceback in run.log, the one whose cloth diverged
+    once (a retry repeats it); a pool that broke under two running sequences charges neither
+    until one breaks a pool alone; the rest complete once."""
     import synmitsuba as sm
     from synmitsuba.generate.run import generate
     cfg = sm.load_generate_config(TINY, ["sequences=6"])
     summary = generate(cfg, tmp_path, workers=2, max_failures=1, progress=False, task=_quick_task)
-    assert sorted(summary.done) == [0, 2, 3, 5] and sorted(summary.failed) == [1, 4]
+    assert sorted(summary.done) == [0, 3, 5] and sorted(summary.failed) == [1, 2, 4]
     assert summary.failed[1] == "ValueError: sequence 1 cannot be composed"
+    assert summary.failed[2].startswith("ClothError: cloth simulation of the skirt diverged at clip frame 16")
     assert summary.failed[4].startswith("a worker died")
     log = [json.loads(x) for x in (tmp_path / "run.log").read_text().splitlines()]
     failures = [e for e in log if "failed" in e]
-    assert sorted((e["sequence"], e["attempt"]) for e in failures) == [(1, 1), (1, 2), (4, 1), (4, 2)]
+    assert sorted((e["sequence"], e["attempt"]) for e in failures) == [(1, 1), (1, 2), (2, 1), (4, 1), (4, 2)]
+    assert [e["final"] for e in failures if e["sequence"] == 2] == [True]
     assert all('raise ValueError(f"sequence {index} cannot be composed")' in e["traceback"]
                for e in failures if e["sequence"] == 1)
     assert all(e["worker_died"] for e in failures if e["sequence"] == 4)
-    assert sorted(e["sequence"] for e in log if "seconds" in e) == [0, 2, 3, 5]  # each finished exactly once
+    assert sorted(e["sequence"] for e in log if "seconds" in e) == [0, 3, 5]  # each finished exactly once
 
 
 

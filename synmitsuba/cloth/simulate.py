@@ -29,7 +29,10 @@ from synmitsuba.geometry import rigid_fit, vertex_normals
 
 
 class ClothError(SynMitsubaError, RuntimeError):
-    """A garment's simulation diverged: the sequence must not be written with that cloth."""
+    """A garment's simulation diverged: the sequence must not be written with that cloth. It
+    ``repeats``: the stage is deterministic, so ``generate`` does not try the sequence again."""
+
+    repeats = True
 
     def __init__(self, garment: str, frame: int, what: str):
         self.garment, self.frame = garment, frame

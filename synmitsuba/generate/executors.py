@@ -6,7 +6,8 @@ A task is ``task(config, index, out) -> manifest entry``. It runs inside ``attem
 turns an exception into a ``Failure`` carrying its one-line summary and its full traceback as
 text (a traceback does not survive pickling); a worker process that dies (killed, out of
 memory, a crash in native code) is a ``Failure`` with ``worker_died`` set, charged only to
-the sequence that was running in it.
+the sequence that was running in it. An exception whose class says ``repeats`` (a cloth
+simulation that diverged: the same seed diverges again) is not tried again.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ class Failure:
     summary: str          # one line: "Type: message"
     traceback: str        # the whole traceback, for run.log
     worker_died: bool = False
+    repeats: bool = False  # what raised says a retry fails the same way (``ClothError``: deterministic)
 
 
 @dataclass
@@ -39,7 +41,8 @@ def attempt(task: Callable, config: dict, index: int, out: str) -> Outcome:
     try:
         return Outcome(index, entry=task(config, index, out))
     except Exception as exc:  # noqa: BLE001 - every failure is reported with its traceback, then retried or listed
-        return Outcome(index, failure=Failure(index, f"{type(exc).__name__}: {exc}", traceback.format_exc()))
+        return Outcome(index, failure=Failure(index, f"{type(exc).__name__}: {exc}", traceback.format_exc(),
+                                              repeats=bool(getattr(exc, "repeats", False))))
 
 
 def _died(index: int, why: str) -> Outcome:

@@ -272,7 +272,8 @@ def generate(config: GenerateConfig, out: str, workers: int = 1, executor: str =
 
 def _drive(pool, todo: list, out: str, max_failures: int, summary: Summary, progress: bool) -> None:
     """Submit every sequence, then take outcomes as they come: append the complete ones, log
-    and resubmit the failed ones until their tries are spent."""
+    and resubmit the failed ones until their tries are spent (at once for a failure that
+    ``repeats``)."""
     attempts = {i: 0 for i in todo}
     images = [0]
     for i in todo:
@@ -283,7 +284,7 @@ def _drive(pool, todo: list, out: str, max_failures: int, summary: Summary, prog
                 _finish(out, outcome.entry, summary, bar, images)
                 continue
             attempts[outcome.index] += 1
-            final = attempts[outcome.index] > max_failures
+            final = outcome.failure.repeats or attempts[outcome.index] > max_failures
             _log_failure(out, outcome.failure, attempts[outcome.index], final)
             if final:
                 summary.failed[outcome.index] = outcome.failure.summary
