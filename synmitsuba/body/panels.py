@@ -274,9 +274,15 @@ def _cut_open(f: np.ndarray, keep: np.ndarray, angle: np.ndarray) -> tuple[np.nd
     return f, np.concatenate([keep, keep[copies]])
 
 
+def _sleeve(panel: int, frame: PanelFrame) -> _Limb | None:
+    """The sleeve a panel is, or None."""
+    return frame.sleeves[panel - SLEEVE_L] if panel in (SLEEVE_L, SLEEVE_R) else None
+
+
 def _grain(panel: int, frame: PanelFrame) -> np.ndarray:
     """The way a panel's grain runs on the body: up, and up a sleeve towards its shoulder."""
-    return -frame.sleeves[panel - SLEEVE_L].axis if panel in (SLEEVE_L, SLEEVE_R) else np.array([0.0, 1.0, 0.0])
+    sleeve = _sleeve(panel, frame)
+    return -sleeve.axis if sleeve is not None else np.array([0.0, 1.0, 0.0])
 
 
 def _uv_grain(vertices: np.ndarray, f: np.ndarray, uv: np.ndarray) -> np.ndarray:
@@ -291,7 +297,7 @@ def _uv_grain(vertices: np.ndarray, f: np.ndarray, uv: np.ndarray) -> np.ndarray
 def _placed(uv: np.ndarray, v: np.ndarray, panel: int, frame: PanelFrame) -> np.ndarray:
     """A flattened piece shifted so v is height (a sleeve's: up from its shoulder) and u is 0
     on a torso panel's centre line."""
-    sleeve = frame.sleeves[panel - SLEEVE_L] if panel in (SLEEVE_L, SLEEVE_R) else None
+    sleeve = _sleeve(panel, frame)
     height = -(v - sleeve.start) @ sleeve.axis if sleeve is not None else v[:, 1]
     uv[:, 1] += np.median(height - uv[:, 1])
     if panel in (TORSO_FRONT, TORSO_BACK):
