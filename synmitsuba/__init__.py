@@ -30,7 +30,7 @@ _FROM = {
                           "sample_hands", "with_hands", "HAND_BEHAVIOURS", "FaceTrack", "FaceKey", "sample_face",
                           "with_face", "EXPRESSIONS"),
     "synmitsuba.cloth": ("simulate_cloth", "drape", "ClothSettings", "ClothTrack", "ClothError", "ClothPiece",
-                         "Collider", "FABRICS", "CLOTH_KINDS"),
+                         "Collider", "FABRICS", "CLOTH_KINDS", "Air"),
     "synmitsuba.compose": ("load_scene_file", "SceneFile", "scene_spec", "add_subjects", "SubjectEntry",
                            "retarget_to_subject", "compose_scene", "ComposeConfig", "SceneSpec", "load_environment",
                            "environment_names"),

@@ -9,7 +9,8 @@ either but set, each frame, its depth in from its edge along the cloth's normal.
 first hangs at the clip's first pose for ``settle_s`` (from the skinned garment: gravity takes
 out its shell's stiffness), then follows the clip frame by frame, starting at the velocity its
 held part moves at (a clip starts at full speed), the body and the held vertices moved linearly
-between frames over the substeps. Newton's full-surface contacts (the
+between frames over the substeps, the air's drag on every triangle added to gravity
+(``cloth.air``: without it a hem swings on as in a vacuum). Newton's full-surface contacts (the
 body's edges and faces against the cloth's, not only its vertices) keep a leg from passing
 between the cloth's vertices."""
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 
 from synmitsuba.body.garments import hem_sources
 from synmitsuba.body.topology import weld
+from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
 from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
@@ -47,6 +49,7 @@ class ClothSettings:
     max_substeps: int = 40
     iterations: int = 5      # VBD iterations per step
     settle_s: float = 0.5    # seconds the cloth hangs at the first pose before the clip starts
+    lead_s: float = 0.3      # the first of those in which the arms come down from the rest pose (``Collider.lead``)
     contact_gap: float = 0.01     # metres within which body contacts are made
     particle_radius: float = 0.004  # metres the cloth keeps off the body
     contact_stiffness: float = 1.0e4  # against the body: 1e3 let a taut cloth 3 mm into a sphere
@@ -56,6 +59,7 @@ class ClothSettings:
     # on a skirt over a walk it fought the body's contacts (a vertex 8.8 mm into the body, then a leg through)
     self_contact: bool = False
     self_contact_margin: float = 0.003  # metres at which two pieces of cloth start to push apart
+    air: Air | None = Air()      # air resistance on the cloth (``cloth.air``); None: a vacuum
     device: str = "cpu"           # Warp's device: "cuda" runs the solver on an NVIDIA GPU (bench/cloth_device.py);
     # bit-identical results are promised on the CPU only
 
@@ -104,6 +108,8 @@ class Collider:
     n_frames: int
     project: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None  # (collider vertices, particles) ->
     # particles moved out of the collider, after each frame (the solver's contacts are soft)
+    lead: Callable[[float], tuple[np.ndarray, np.ndarray]] | None = None  # as ``at``, from w = 0 (where the cloth
+    # is put on) to w = 1 (frame 0), over ``ClothSettings.lead_s`` at the start of the settling
 
 
 @dataclass
@@ -188,9 +194,19 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
     and the skinned garments' particles (where held ones go) per frame of ``motion``."""
     garments = simulated_garments(human)
 
-    def at(frame: int) -> tuple[np.ndarray, np.ndarray]:  # (closed body, skinned garments' particles)
-        layers = human.pose(*motion.frame(frame), face=motion.face_at(frame))
+    def posed(rotations: np.ndarray, root: np.ndarray, face) -> tuple[np.ndarray, np.ndarray]:
+        layers = human.pose(rotations, root, face=face)  # (closed body, skinned garments' particles)
         return human.closed_body(layers), np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
+
+    def at(frame: int) -> tuple[np.ndarray, np.ndarray]:
+        rotations, root = motion.frame(frame)
+        return posed(rotations, root, motion.face_at(frame))
+
+    arms = _arms(human.skeleton)
+
+    def lead(w: float) -> tuple[np.ndarray, np.ndarray]:
+        rotations, root = _arms_from_rest(motion.frame(0), arms, w)
+        return posed(rotations, root, motion.face_at(0))
 
     seals = _seals(human, garments)
 
@@ -199,7 +215,27 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
             q = seal.apply(body, q)
         return out_of_body(human, body, q, s.particle_radius / 2)
 
-    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project)
+    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead)
+
+
+def _arms(skeleton) -> np.ndarray:
+    """Joints from each shoulder down (``shoulder01.L``/``.R`` and their descendants)."""
+    inside = np.zeros(len(skeleton), bool)
+    for side in "LR":
+        inside[skeleton.index(f"shoulder01.{side}")] = True
+    for j, p in enumerate(skeleton.parents):
+        inside[j] |= p >= 0 and inside[p]
+    return np.flatnonzero(inside)
+
+
+def _arms_from_rest(frame: tuple[np.ndarray, np.ndarray], arms: np.ndarray, w: float):
+    """``frame``'s pose with its ``arms`` at the fraction ``w`` of the way from the rest pose
+    (an A-pose, hands clear of any skirt: w = 0) to their own (w = 1), slerped."""
+    from scipy.spatial.transform import Rotation
+    rotations, root = frame
+    out = np.array(rotations, dtype=np.float64)
+    out[arms] = Rotation.from_rotvec(Rotation.from_matrix(out[arms]).as_rotvec() * w).as_matrix()
+    return out, root
 
 
 def _seals(human, garments: list[_Garment]) -> list[WaistSeal]:
@@ -272,10 +308,43 @@ def _model(pieces: list[ClothPiece], faces: np.ndarray, collider_v: np.ndarray, 
     return model, mesh, held
 
 
+@dataclass
+class _Schedule:
+    """Where the collider and the held particles are at the end of each solver frame ``f``: the
+    settling frames (f < 0), the first ``lead`` of them moving along ``Collider.lead`` to frame
+    0, where the rest stand still; then the clip's frames."""
+
+    collider: Collider
+    settle: int
+    lead: int
+    first: tuple[np.ndarray, np.ndarray]  # frame 0
+
+    @classmethod
+    def of(cls, collider: Collider, s: ClothSettings) -> "_Schedule":
+        settle = int(round(s.settle_s * collider.fps))
+        lead = min(max(int(round(s.lead_s * collider.fps)), 1), settle) if collider.lead is not None else 0
+        return cls(collider, settle, lead, collider.at(0))
+
+    def start(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where the cloth is put on."""
+        return self.collider.lead(0.0) if self.lead and self.collider.lead is not None else self.first
+
+    def moving(self, f: int) -> bool:
+        return f > 0 or f < self.lead - self.settle
+
+    def at(self, f: int) -> tuple[np.ndarray, np.ndarray]:
+        if f > 0:
+            return self.collider.at(f)
+        if self.moving(f) and self.collider.lead is not None:
+            return self.collider.lead(_smoothstep((f + self.settle + 1) / self.lead))
+        return self.first
+
+
 def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: list[str]) -> np.ndarray:
     import newton
-    body0, q0 = collider.at(0)
-    model, mesh, held = _model(pieces, collider.faces, body0, q0, s)
+    plan = _Schedule.of(collider, s)
+    (body0, q0), start = plan.first, plan.start()
+    model, mesh, held = _model(pieces, collider.faces, start[0], start[1], s)
     solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
                                       particle_self_contact_margin=s.self_contact_margin,
                                       particle_self_contact_gap=s.self_contact_margin / 2)
@@ -284,10 +353,12 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
                                         enable_rigid_soft_full_surface_contact=s.full_contact)
     contacts = pipeline.contacts()
     out = np.empty((collider.n_frames, len(q0), 3))
-    prev = (body0, q0)
-    near = _near(body0, q0)
-    for f in range(-int(round(s.settle_s * collider.fps)), collider.n_frames):
-        now = collider.at(f) if f > 0 else (body0, q0)
+    faces, weight = _all_faces(pieces)
+    prev, near = start, _near(body0, q0)
+    for f in range(-plan.settle, collider.n_frames):
+        now, moving = plan.at(f), plan.moving(f)
+        if plan.lead and f == plan.lead - plan.settle:  # the arms are down: the body stands at frame 0, still
+            _move(mesh, body0, np.zeros_like(body0))
         n = _substeps(prev[0][near], now[0][near], s)
         dt = 1.0 / collider.fps / n
         if f == 1:
@@ -295,13 +366,15 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
                                                                            collider.fps))
         for k in range(n):
             w = (k + 1) / n
-            if f > 0:
+            if moving:
                 _move(mesh, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
                 q = s0.particle_q.numpy()
                 q[held] = (prev[1] + w * (now[1] - prev[1]))[held]
                 s0.particle_q.assign(q)
             pipeline.collide(s0, contacts)
             s0.clear_forces()
+            if s.air is not None:
+                _blow(s0, faces, weight, dt, s.air)
             solver.step(s0, s1, control, contacts, dt)
             s0, s1 = s1, s0
         q = s0.particle_q.numpy()
@@ -314,6 +387,24 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
             _check(out[f], now[1], pieces, names, f, s.max_drift)
         prev = now
     return out
+
+
+def _blow(state, faces: np.ndarray, weight: np.ndarray, dt: float, air: Air) -> None:
+    """The air's drag on the cloth as the state's external particle forces for the next step."""
+    forces = drag_forces(state.particle_q.numpy().astype(np.float64), state.particle_qd.numpy(), faces, weight, dt, air)
+    state.particle_f.assign(forces.astype(np.float32))
+
+
+def _smoothstep(x: float) -> float:
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3 - 2 * x)
+
+
+def _all_faces(pieces: list[ClothPiece]) -> tuple[np.ndarray, np.ndarray]:
+    """Every piece's triangles over the concatenated particles, and each one's areal density."""
+    starts = np.cumsum([0] + [len(p.held) for p in pieces[:-1]])
+    faces = np.concatenate([p.faces + s for p, s in zip(pieces, starts)])
+    return faces, np.concatenate([np.full(len(p.faces), p.fabric.density) for p in pieces])
 
 
 def _start_velocity(pieces: list[ClothPiece], q: np.ndarray, held_from: np.ndarray, held_to: np.ndarray,
