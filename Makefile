@@ -51,7 +51,7 @@ lint: setup   # ruff, and mypy over the package (settings in pyproject.toml)
 	$(VENV)/bin/mypy
 
 test: setup lint   # test files spread over the cores (at most 4 workers: each holds a body model)
-	$(PY) -m pytest -q -n auto --maxprocesses 4 --dist loadfile
+	$(PY) -m pytest -q -n auto --maxprocesses 4 --dist loadfile --durations=20  # the slowest, to keep it under ~15 min
 
 test-all: setup
 	$(PY) -m pytest -q -m ''

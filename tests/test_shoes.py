@@ -120,6 +120,8 @@ def test_in_motion_soles_meet_the_ground_and_the_toes_stay_in_the_shoe(motion, k
     shoe = _shoe(h)
     front = [ids[_covered(h.body.vertices[ids], kind)] for ids in (_foot(h, 1.0), _foot(h, -1.0))]
     rows = np.isin(h.split.source, np.concatenate(front))  # the body layer is the seam-split render mesh
+    rows = np.flatnonzero(rows)[::3]  # a third of them, spread over the forefoot: the reference's winding
+    # numbers cost 2 s a frame for all (the suite's slowest test), and a toe through the shoe is many
     lowest, slide, before = [], [0.0], None
     for f in range(clip.n_frames):
         layers = {lay.name: lay for lay in h.pose(*clip.frame(f))}
