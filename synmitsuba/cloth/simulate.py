@@ -6,8 +6,9 @@ Each garment's uv seams are welded (else its panels fall apart); its held vertic
 waistband, a bodice) are not simulated but moved to the skinned garment's place at every
 substep, and the rest hangs from them; its hem band (the turned-in edge) is not simulated
 either but set, each frame, its depth in from its edge along the cloth's normal. The cloth
-first hangs at the clip's first pose for ``settle_s`` (from the skinned garment: gravity takes
-out its shell's stiffness), then follows the clip frame by frame, starting at the velocity its
+is put on with the arms in the rest A-pose (hands clear of any skirt) and hangs for ``settle_s``
+(from the skinned garment: gravity takes out its shell's stiffness), the arms coming down to the
+clip's first pose over its first ``lead_s``, then follows the clip frame by frame, starting at the velocity its
 held part moves at (a clip starts at full speed), the body and the held vertices moved linearly
 between frames over the substeps, the air's drag on every triangle added to gravity
 (``cloth.air``: without it a hem swings on as in a vacuum). Newton's full-surface contacts (the
