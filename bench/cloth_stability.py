@@ -1,6 +1,6 @@
 """The cloth stage's stability over many random clips (issue 34: "no NaN or exploding vertex
 over 1,000 random subject x motion clips"), resumable: one JSON line per clip is appended to
-``--log``, and a later run starts after the last clip logged, so the count grows run by run
+``--log``, and a later run skips the clips logged, so the count grows run by run
 (a clip takes about a minute on one core of this CPU; 1,000 is more than one session holds).
 
 Clip ``k`` is drawn from ``numpy.random.default_rng(k)``: subjects are sampled as
@@ -16,6 +16,7 @@ Prints a JSON summary of the whole log (clips over half a metre in either: worth
 
     python bench/cloth_stability.py [--clips 1000] [--seconds 1.0] [--log bench/cloth_stability.jsonl]
                                     [--until SECONDS]   # stop starting clips after this long
+                                    [--from K]          # start at clip K (skipping clips logged)
 """
 import argparse
 import json
@@ -100,17 +101,20 @@ def main(argv=None) -> dict:
     ap.add_argument("--seconds", type=float, default=1.0)
     ap.add_argument("--log", default=os.path.join(HERE, "cloth_stability.jsonl"))
     ap.add_argument("--until", type=float, default=None, help="start no clip after this many seconds")
+    ap.add_argument("--from", dest="first", type=int, default=0,
+                    help="first clip to run; clips already in the log are skipped (two processes sharing one log "
+                         "take two ranges, e.g. --from 0 and --from 500)")
     args = ap.parse_args(argv)
-    rows = read_log(args.log)
     start = time.perf_counter()
-    for k in range(len(rows), args.clips):
+    for k in range(args.first, args.clips):
         if args.until is not None and time.perf_counter() - start > args.until:
             break
+        if k in {r["clip"] for r in read_log(args.log)}:  # re-read: another process may share the log
+            continue
         row = run_clip(k, args.seconds)
-        with open(args.log, "a") as fh:
+        with open(args.log, "a") as fh:  # one line, one write: appends from two processes do not interleave
             fh.write(json.dumps(row) + "\n")
-        rows.append(row)
-    return summary(rows)
+    return summary(sorted(read_log(args.log), key=lambda r: r["clip"]))
 
 
 if __name__ == "__main__":

@@ -203,6 +203,15 @@ def spec(default: Any = MISSING, check: Check | None = None, *, factory=MISSING,
     return dataclasses.field(default=default, default_factory=factory, metadata={"check": check, "doc": doc})
 
 
+def check_fields(obj, where: str) -> None:
+    """Run each field's spec check on ``obj``'s own value (for a dataclass built in code, not
+    read with ``from_dict``), storing the normalised value (frozen dataclasses too)."""
+    for f in dataclasses.fields(obj):
+        check = f.metadata.get("check")
+        if check is not None:
+            object.__setattr__(obj, f.name, check(f"{where}.{f.name}", getattr(obj, f.name)))
+
+
 def mapping(where: str, data, allowed=None) -> dict:
     """``data`` must be a mapping with only ``allowed`` keys (when given)."""
     if not isinstance(data, dict):

@@ -14,6 +14,7 @@ from scipy.spatial import cKDTree
 
 from synmitsuba.cloth import FABRICS, Air, ClothError, ClothPiece, ClothSettings, Collider, drape, simulate_cloth
 from synmitsuba.cloth.air import drag_forces
+from synmitsuba.errors import ConfigError
 
 G = 9.81
 CENTRE, R = np.array([0.0, 0.5, 0.0]), 0.3
@@ -262,18 +263,50 @@ def test_cloth_is_put_on_before_a_hand_comes_down_onto_it():
 
 def test_the_arms_come_down_from_the_rest_pose_and_nothing_else_moves():
     from synmitsuba.body.skeleton import Skeleton
-    from synmitsuba.cloth.simulate import _arms, _arms_from_rest
+    from synmitsuba.cloth.lead import arm_joints, arms_from_rest
     names = ("root", "spine", "shoulder01.L", "upperarm01.L", "wrist.L", "shoulder01.R", "lowerarm01.R", "neck")
     sk = Skeleton(names, np.array([-1, 0, 1, 2, 3, 1, 5, 1]), np.zeros((8, 3)))
-    assert list(_arms(sk)) == [2, 3, 4, 5, 6]
+    assert list(arm_joints(sk)) == [2, 3, 4, 5, 6]
     rotations = np.stack([trimesh.transformations.rotation_matrix(0.2 * (j + 1), [1, 2, 3])[:3, :3] for j in range(8)])
     root = np.array([1.0, 2.0, 3.0])
     for w in (0.0, 0.5, 1.0):
-        out, r = _arms_from_rest((rotations, root), _arms(sk), w)
+        out, r = arms_from_rest((rotations, root), arm_joints(sk), w)
         assert np.array_equal(r, root) and np.array_equal(out[[0, 1, 7]], rotations[[0, 1, 7]])
         for j in (2, 3, 4, 5, 6):  # the same axis, w of the angle
             want = trimesh.transformations.rotation_matrix(w * 0.2 * (j + 1), [1, 2, 3])[:3, :3]
             assert np.allclose(out[j], want, atol=1e-12)
+
+
+def test_the_schedule_puts_the_cloth_on_then_brings_the_arms_down_then_stands():
+    """At 30 fps, settle 0.5 s and lead 0.3 s: solver frames -15..-7 move along the lead from
+    where the cloth is put on (w = 0) to w = 1 by a smoothstep (3w^2 - 2w^3, written out here),
+    frames -6..0 stand at frame 0, then the clip's frames; without a lead, all settle at frame 0."""
+    from synmitsuba.cloth.lead import Schedule
+    at = lambda f: (np.full((1, 3), 100.0 + f), np.zeros((1, 3)))  # noqa: E731
+    lead = lambda w: (np.full((1, 3), w), np.zeros((1, 3)))  # noqa: E731
+    plan = Schedule.of(Collider(np.zeros((1, 3), int), at, 30.0, 5, lead=lead), ClothSettings(settle_s=0.5, lead_s=0.3))
+    assert (plan.settle, plan.lead) == (15, 9) and plan.start()[0][0, 0] == 0.0
+    for f in range(-15, 5):
+        x = (f + 16) / 9
+        want = 3 * x**2 - 2 * x**3 if f < -6 else 100.0 + max(f, 0)
+        assert plan.moving(f) == (f < -6 or f > 0), f
+        assert plan.at(f)[0][0, 0] == pytest.approx(want, abs=1e-12), f
+    still = Schedule.of(Collider(np.zeros((1, 3), int), at, 30.0, 5), ClothSettings(settle_s=0.5, lead_s=0.3))
+    assert still.lead == 0 and still.start()[0][0, 0] == 100.0
+    assert not any(still.moving(f) for f in range(-15, 1)) and still.at(-3)[0][0, 0] == 100.0
+
+
+@pytest.mark.parametrize("field, value", [("substeps", 0), ("max_substeps", 5), ("settle_s", -1.0),
+                                          ("particle_radius", float("nan")), ("device", "tpu")])
+def test_bad_cloth_settings_name_the_field(field, value):
+    with pytest.raises(ConfigError, match=rf"cloth\.{field} = "):
+        ClothSettings(**{field: value})
+
+
+@pytest.mark.parametrize("field", ["density", "drag"])
+def test_bad_air_names_the_field(field):
+    with pytest.raises(ConfigError, match=rf"cloth\.air\.{field} = -1"):
+        Air(**{field: -1.0})
 
 
 def test_a_diverging_cloth_is_an_error_naming_it_and_the_frame():

@@ -11,11 +11,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.schema import Number, check_fields, spec
+
 
 @dataclass(frozen=True)
 class Air:
-    density: float = 1.2  # kg per cubic metre, at sea level and 20 °C
-    drag: float = 1.2     # drag coefficient of a flat plate broadside on
+    density: float = spec(1.2, Number(0.0), doc="kg per cubic metre (1.2 at sea level and 20 °C; 0: a vacuum)")
+    drag: float = spec(1.2, Number(0.0), doc="drag coefficient of a flat plate broadside on")
+
+    def __post_init__(self):
+        check_fields(self, "cloth.air")
 
 
 def drag_forces(q: np.ndarray, v: np.ndarray, faces: np.ndarray, areal_density: np.ndarray, dt: float,

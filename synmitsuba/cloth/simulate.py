@@ -16,6 +16,7 @@ body's edges and faces against the cloth's, not only its vertices) keep a leg fr
 between the cloth's vertices."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Callable
 
@@ -26,9 +27,11 @@ from synmitsuba.body.topology import weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
 from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
+from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
-from synmitsuba.errors import SynMitsubaError
+from synmitsuba.errors import ConfigError, SynMitsubaError
 from synmitsuba.geometry import rigid_fit, vertex_normals
+from synmitsuba.schema import POSITIVE, Check, Flag, Nested, Number, check_fields, optional, spec
 
 
 class ClothError(SynMitsubaError, RuntimeError):
@@ -44,25 +47,47 @@ class ClothError(SynMitsubaError, RuntimeError):
 
 
 @dataclass(frozen=True)
+class _Device(Check):
+    """A Warp device: ``cpu``, ``cuda`` or ``cuda:N``."""
+
+    def __call__(self, where: str, value):
+        if not (isinstance(value, str) and re.fullmatch(r"cpu|cuda(:\d+)?", value)):
+            raise ConfigError(where, value, "give cpu, cuda or cuda:N (an NVIDIA GPU's index)")
+        return value
+
+
+_METRES = Number(0.0)
+
+
+@dataclass(frozen=True)
 class ClothSettings:
-    substeps: int = 10       # solver steps per clip frame, at least
-    max_step: float = 0.004  # metres the collider near the cloth may move in one step: more steps where it is faster
-    max_substeps: int = 40
-    iterations: int = 5      # VBD iterations per step
-    settle_s: float = 0.5    # seconds the cloth hangs at the first pose before the clip starts
-    lead_s: float = 0.3      # the first of those in which the arms come down from the rest pose (``Collider.lead``)
-    contact_gap: float = 0.01     # metres within which body contacts are made
-    particle_radius: float = 0.004  # metres the cloth keeps off the body
-    contact_stiffness: float = 1.0e4  # against the body: 1e3 let a taut cloth 3 mm into a sphere
-    full_contact: bool = True     # the body's edges and faces too, not only its vertices
-    max_drift: float = 1.0        # metres a vertex may stray from the skinned garment before it counts as diverged
+    substeps: int = spec(10, POSITIVE, doc="solver steps per clip frame, at least")
+    max_step: float = spec(0.004, Number(1e-4), doc="metres the collider near the cloth may move in one step: "
+                           "more steps where it is faster")
+    max_substeps: int = spec(40, POSITIVE)
+    iterations: int = spec(5, POSITIVE, doc="VBD iterations per step")
+    settle_s: float = spec(0.5, Number(0.0), doc="seconds the cloth hangs at the first pose before the clip starts")
+    lead_s: float = spec(0.3, Number(0.0), doc="the first of those in which the arms come down from the rest pose "
+                         "(Collider.lead)")
+    contact_gap: float = spec(0.01, _METRES, doc="metres within which body contacts are made")
+    particle_radius: float = spec(0.004, _METRES, doc="metres the cloth keeps off the body")
+    contact_stiffness: float = spec(1.0e4, Number(0.0), doc="against the body: 1e3 let a taut cloth 3 mm into a sphere")
+    full_contact: bool = spec(True, Flag(), doc="the body's edges and faces too, not only its vertices")
+    max_drift: float = spec(1.0, _METRES, doc="metres a vertex may stray from the skinned garment before it "
+                            "counts as diverged")
     # cloth against itself and the other simulated pieces (Newton VBD's self-contact); off by default:
     # on a skirt over a walk it fought the body's contacts (a vertex 8.8 mm into the body, then a leg through)
-    self_contact: bool = False
-    self_contact_margin: float = 0.003  # metres at which two pieces of cloth start to push apart
-    air: Air | None = Air()      # air resistance on the cloth (``cloth.air``); None: a vacuum
-    device: str = "cpu"           # Warp's device: "cuda" runs the solver on an NVIDIA GPU (bench/cloth_device.py);
-    # bit-identical results are promised on the CPU only
+    self_contact: bool = spec(False, Flag())
+    self_contact_margin: float = spec(0.003, _METRES, doc="metres at which two pieces of cloth start to push apart")
+    air: Air | None = spec(Air(), optional(Nested(Air)), doc="air resistance on the cloth (cloth.air); None: a vacuum")
+    device: str = spec("cpu", _Device(), doc="Warp's device: cuda runs the solver on an NVIDIA GPU "
+                       "(bench/cloth_device.py); bit-identical results are promised on the CPU only")
+
+    def __post_init__(self):
+        check_fields(self, "cloth")
+        if self.max_substeps < self.substeps:
+            raise ConfigError("cloth.max_substeps", self.max_substeps,
+                              f"give at least substeps ({self.substeps})")
 
 
 @dataclass
@@ -203,10 +228,10 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
         rotations, root = motion.frame(frame)
         return posed(rotations, root, motion.face_at(frame))
 
-    arms = _arms(human.skeleton)
+    arms = arm_joints(human.skeleton)
 
     def lead(w: float) -> tuple[np.ndarray, np.ndarray]:
-        rotations, root = _arms_from_rest(motion.frame(0), arms, w)
+        rotations, root = arms_from_rest(motion.frame(0), arms, w)
         return posed(rotations, root, motion.face_at(0))
 
     seals = _seals(human, garments)
@@ -217,26 +242,6 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
         return out_of_body(human, body, q, s.particle_radius / 2)
 
     return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead)
-
-
-def _arms(skeleton) -> np.ndarray:
-    """Joints from each shoulder down (``shoulder01.L``/``.R`` and their descendants)."""
-    inside = np.zeros(len(skeleton), bool)
-    for side in "LR":
-        inside[skeleton.index(f"shoulder01.{side}")] = True
-    for j, p in enumerate(skeleton.parents):
-        inside[j] |= p >= 0 and inside[p]
-    return np.flatnonzero(inside)
-
-
-def _arms_from_rest(frame: tuple[np.ndarray, np.ndarray], arms: np.ndarray, w: float):
-    """``frame``'s pose with its ``arms`` at the fraction ``w`` of the way from the rest pose
-    (an A-pose, hands clear of any skirt: w = 0) to their own (w = 1), slerped."""
-    from scipy.spatial.transform import Rotation
-    rotations, root = frame
-    out = np.array(rotations, dtype=np.float64)
-    out[arms] = Rotation.from_rotvec(Rotation.from_matrix(out[arms]).as_rotvec() * w).as_matrix()
-    return out, root
 
 
 def _seals(human, garments: list[_Garment]) -> list[WaistSeal]:
@@ -309,41 +314,9 @@ def _model(pieces: list[ClothPiece], faces: np.ndarray, collider_v: np.ndarray, 
     return model, mesh, held
 
 
-@dataclass
-class _Schedule:
-    """Where the collider and the held particles are at the end of each solver frame ``f``: the
-    settling frames (f < 0), the first ``lead`` of them moving along ``Collider.lead`` to frame
-    0, where the rest stand still; then the clip's frames."""
-
-    collider: Collider
-    settle: int
-    lead: int
-    first: tuple[np.ndarray, np.ndarray]  # frame 0
-
-    @classmethod
-    def of(cls, collider: Collider, s: ClothSettings) -> "_Schedule":
-        settle = int(round(s.settle_s * collider.fps))
-        lead = min(max(int(round(s.lead_s * collider.fps)), 1), settle) if collider.lead is not None else 0
-        return cls(collider, settle, lead, collider.at(0))
-
-    def start(self) -> tuple[np.ndarray, np.ndarray]:
-        """Where the cloth is put on."""
-        return self.collider.lead(0.0) if self.lead and self.collider.lead is not None else self.first
-
-    def moving(self, f: int) -> bool:
-        return f > 0 or f < self.lead - self.settle
-
-    def at(self, f: int) -> tuple[np.ndarray, np.ndarray]:
-        if f > 0:
-            return self.collider.at(f)
-        if self.moving(f) and self.collider.lead is not None:
-            return self.collider.lead(_smoothstep((f + self.settle + 1) / self.lead))
-        return self.first
-
-
 def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: list[str]) -> np.ndarray:
     import newton
-    plan = _Schedule.of(collider, s)
+    plan = Schedule.of(collider, s)
     (body0, q0), start = plan.first, plan.start()
     model, mesh, held = _model(pieces, collider.faces, start[0], start[1], s)
     solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
@@ -394,11 +367,6 @@ def _blow(state, faces: np.ndarray, weight: np.ndarray, dt: float, air: Air) -> 
     """The air's drag on the cloth as the state's external particle forces for the next step."""
     forces = drag_forces(state.particle_q.numpy().astype(np.float64), state.particle_qd.numpy(), faces, weight, dt, air)
     state.particle_f.assign(forces.astype(np.float32))
-
-
-def _smoothstep(x: float) -> float:
-    x = min(max(x, 0.0), 1.0)
-    return x * x * (3 - 2 * x)
 
 
 def _all_faces(pieces: list[ClothPiece]) -> tuple[np.ndarray, np.ndarray]:
