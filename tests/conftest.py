@@ -1,10 +1,10 @@
-"""Shared test setup: caches in the repository (reused across runs), idle OpenMP threads that
-sleep, the default variant."""
+"""Shared test setup: kernel caches in the repository (reused across runs; anny's 790 MB model
+stays in the user's cache, ``ANNY_CACHE_DIR`` or ``~/.cache/anny``, shared with ``make demo`` and
+every checkout, as README says), idle OpenMP threads that sleep, the default variant."""
 import os
 import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-os.environ.setdefault("ANNY_CACHE_DIR", str(ROOT / ".cache" / "anny"))
 os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".cache" / "warp"))
 os.environ.setdefault("DRJIT_CACHE_DIR", str(ROOT / ".cache" / "drjit"))
 # torch's OpenMP threads sleep when idle instead of spinning (before torch loads; thread counts,
