@@ -49,7 +49,7 @@ STYLES = {
     "fringe": HairStyle((0.12, 0.10, 0.07, 0.08, 0.06), 0.8, 0.4, 0.05, 0.07),
 }
 HAIRLINE_TOP, BANGS_TOP = 0.45, 0.15  # relative heights over the head centre: hair over the face stops there
-# (for hair combed from a part, at most the head's own hairline: ``hairline_height``)
+# (for hair combed from a part or back, at most the head's own hairline: ``hairline_height``)
 K = 10  # control points per strand: enough for a smooth fall and one or two curls
 SUBSTEPS = 4  # growth steps per segment on average
 # growth steps at which control points are kept: close together at the root, where a strand bends
@@ -192,10 +192,10 @@ FACE_HALF_WIDTH = 0.85  # of the head's half width: hair in front of the face is
 
 def hairline_height(scalp: ScalpRegions) -> float:
     """Relative height (over the head centre, in ``radii``) of the front hairline, where the
-    scalp's front region starts at the middle of the forehead: for hair combed from a part, the
-    face that ``_clear_face`` keeps hair out of ends there. Above it lies scalp, where that hair
-    is rooted and combed away from the part; moving it aside there too bared a wedge of scalp
-    that widened down to the forehead."""
+    scalp's front region starts at the middle of the forehead: for hair combed from a part or
+    back, the face that ``_clear_face`` keeps hair out of ends there. Above it lies scalp, where
+    that hair is rooted and combed; moving it aside there too bared a wedge of scalp that
+    widened down to the forehead."""
     B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     local = (scalp.vertices - scalp.origin) @ B.T / scalp.radii
     front = (scalp.region == 0) & (np.abs(local[:, 0]) < 0.3)
@@ -478,7 +478,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     parts = []
     n_total = int(STRANDS[0] + (STRANDS[1] - STRANDS[0]) * params.density)
     top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
-    if parting in ("side", "centre"):  # combed from a part: the scalp above the hairline keeps its hair
+    if parting != "crown":  # combed from a part or back: the scalp above the hairline keeps its hair
         top = min(top, hairline_height(scalp))  # (curls and afros still frame the face from higher up)
     for r_idx in range(5):
         L = style.lengths[r_idx] * params.length
