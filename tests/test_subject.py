@@ -423,30 +423,38 @@ def test_hair_falls_in_smooth_locks_from_a_part(human):
     assert (np.sign(tip_x[off_part]) == np.sign(root_x[off_part])).mean() > 0.97
 
 
+def _scalp_points(scalp, region: int) -> tuple[np.ndarray, np.ndarray]:
+    """20 random points on each face of a scalp ``region`` and their (N, 3) head-frame coordinates."""
+    from synmitsuba.geometry import frame
+    tri = scalp.vertices[scalp.faces[(scalp.region[scalp.faces] == region).all(1)]]
+    w = np.random.default_rng(0).dirichlet((1, 1, 1), (len(tri), 20))
+    pts = np.einsum("fnk,fka->fna", w, tri).reshape(-1, 3)
+    return pts, (pts - scalp.origin) @ frame(scalp.forward, scalp.up)
+
+
+def _bare(scalp, style: str, pts: np.ndarray) -> float:
+    """Share of ``pts`` on the scalp without a strand of ``style`` (outside the head) within 4 mm."""
+    from scipy.spatial import cKDTree
+    from synmitsuba.body.hair import HairParams, grow_hair
+    s = grow_hair(HairParams(style=style, curliness=0.0, density=0.5, seed=3), scalp)
+    P = s.points[s.region < 5]
+    f = np.linspace(0, 1, 8, endpoint=False)[None, None, :, None]
+    dense = (P[:, :-1, None] * (1 - f) + P[:, 1:, None] * f).reshape(-1, 3)
+    outside = dense[signed_distance(scalp.vertices, scalp.faces, dense) > 0]
+    return float((cKDTree(outside).query(pts)[0] > 0.004).mean())
+
+
 def test_a_part_is_a_thin_line(human):
     """Strands leave a part and lie over the scalp beside it: points of the top of the scalp 1-3
     cm from a centre part have a strand (outside the head) within 4 mm (all but 17 % for long hair,
     1 % for a bob; the rest lie under strands higher than that). Control points evenly
     spaced along a long strand put its first chord inside the head and bared a 3-4 cm strip
     (97 % of those points bare for long hair)."""
-    from scipy.spatial import cKDTree
-    from synmitsuba.body.hair import HairParams, grow_hair
-    from synmitsuba.geometry import frame
-    scalp = human.scalp
-    B = frame(scalp.forward, scalp.up).T
-    tri = scalp.vertices[scalp.faces[(scalp.region[scalp.faces] == 1).all(1)]]
-    w = np.random.default_rng(0).dirichlet((1, 1, 1), (len(tri), 20))
-    pts = np.einsum("fnk,fka->fna", w, tri).reshape(-1, 3)
-    x, z = ((pts - scalp.origin) @ B.T)[:, [0, 2]].T
+    pts, local = _scalp_points(human.scalp, 1)
+    x, z = local[:, [0, 2]].T
     band = (np.abs(x) > 0.01) & (np.abs(x) < 0.03) & (z > -0.03)  # beside the part, ahead of the crown
     for style in ("long", "bob"):
-        s = grow_hair(HairParams(style=style, curliness=0.0, density=0.5, seed=3), scalp)
-        P = s.points[s.region < 5]
-        f = np.linspace(0, 1, 8, endpoint=False)[None, None, :, None]
-        dense = (P[:, :-1, None] * (1 - f) + P[:, 1:, None] * f).reshape(-1, 3)
-        outside = dense[signed_distance(scalp.vertices, scalp.faces, dense) > 0]
-        gap, _ = cKDTree(outside).query(pts[band])
-        assert (gap > 0.004).mean() < 0.25, (style, (gap > 0.004).mean())
+        assert _bare(human.scalp, style, pts[band]) < 0.25, style
 
 
 def test_a_part_stays_thin_down_to_the_hairline(human):
@@ -456,25 +464,11 @@ def test_a_part_stays_thin_down_to_the_hairline(human):
     instead of 3 cm above it. Measured: no point bare (long, bob, crew); moving hair aside from
     the scalp above the hairline bared a wedge (5 %, 5 % and 4 % of those points bare on this
     head, 53 % and 10 % with long hair on two sampled ones)."""
-    from scipy.spatial import cKDTree
-    from synmitsuba.body.hair import HairParams, grow_hair
-    from synmitsuba.geometry import frame
-    scalp = human.scalp
-    B = frame(scalp.forward, scalp.up).T
-    tri = scalp.vertices[scalp.faces[(scalp.region[scalp.faces] == 0).all(1)]]
-    w = np.random.default_rng(0).dirichlet((1, 1, 1), (len(tri), 20))
-    pts = np.einsum("fnk,fka->fna", w, tri).reshape(-1, 3)
-    x = ((pts - scalp.origin) @ B.T)[:, 0]
-    band = (np.abs(x) > 0.005) & (np.abs(x) < 0.02)
+    pts, local = _scalp_points(human.scalp, 0)
+    band = (np.abs(local[:, 0]) > 0.005) & (np.abs(local[:, 0]) < 0.02)
     assert band.sum() > 50
     for style in ("long", "bob", "crew"):
-        s = grow_hair(HairParams(style=style, curliness=0.0, density=0.5, seed=3), scalp)
-        P = s.points[s.region < 5]
-        f = np.linspace(0, 1, 8, endpoint=False)[None, None, :, None]
-        dense = (P[:, :-1, None] * (1 - f) + P[:, 1:, None] * f).reshape(-1, 3)
-        outside = dense[signed_distance(scalp.vertices, scalp.faces, dense) > 0]
-        gap, _ = cKDTree(outside).query(pts[band])
-        assert (gap > 0.004).mean() < 0.01, (style, (gap > 0.004).mean())
+        assert _bare(human.scalp, style, pts[band]) < 0.01, style
 
 
 def test_an_afro_is_a_rounded_mass_of_coils(human):
