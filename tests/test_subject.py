@@ -440,7 +440,10 @@ def _bare(scalp, style: str, pts: np.ndarray) -> float:
     P = s.points[s.region < 5]
     f = np.linspace(0, 1, 8, endpoint=False)[None, None, :, None]
     dense = (P[:, :-1, None] * (1 - f) + P[:, 1:, None] * f).reshape(-1, 3)
-    outside = dense[signed_distance(scalp.vertices, scalp.faces, dense) > 0]
+    near = dense[np.isfinite(cKDTree(pts).query(dense, distance_upper_bound=0.005)[0])]  # only these can count
+    outside = near[signed_distance(scalp.vertices, scalp.faces, near) > 0]
+    if not len(outside):
+        return 1.0
     return float((cKDTree(outside).query(pts)[0] > 0.004).mean())
 
 
