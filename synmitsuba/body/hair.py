@@ -49,7 +49,7 @@ STYLES = {
     "fringe": HairStyle((0.12, 0.10, 0.07, 0.08, 0.06), 0.8, 0.4, 0.05, 0.07),
 }
 HAIRLINE_TOP, BANGS_TOP = 0.45, 0.15  # relative heights over the head centre: hair over the face stops there
-# (for hair combed from a part or back, at most the head's own hairline: ``hairline_height``)
+# (at most the head's own hairline: ``hairline_height``)
 K = 10  # control points per strand: enough for a smooth fall and one or two curls
 SUBSTEPS = 4  # growth steps per segment on average
 # growth steps at which control points are kept: close together at the root, where a strand bends
@@ -208,7 +208,8 @@ def _clear_face(scalp: ScalpRegions, strands: np.ndarray, top: float) -> np.ndar
     a curtain over the eyes. The face is an oval ahead of the head's centre: ``FACE_HALF_WIDTH``
     of the head's half width up to the centre's height, rounding off to ``top`` (relative
     height) above it, so hair sliding around it frames the face instead of cutting straight
-    across the forehead."""
+    across the forehead. The move is spread along each strand (``_sweep``): a strand bends aside
+    before the face and back after it instead of jumping there in one straight segment."""
     B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     local = (strands - scalp.origin) @ B.T
     rx, ry, rz = scalp.radii
@@ -216,17 +217,41 @@ def _clear_face(scalp: ScalpRegions, strands: np.ndarray, top: float) -> np.ndar
     rise = np.clip(local[..., 1] / (top * ry), 0.0, None)
     half = FACE_HALF_WIDTH * rx * np.sqrt(np.clip(1.0 - rise ** 2, 0.0, None))
     window = (local[..., 2] > 0.2 * rz) & (np.abs(local[..., 0]) < half)
-    window[:, 0] = False  # roots stay where they grew
-    x = np.where(window, side * half, local[..., 0])
-    local = np.concatenate([x[..., None], local[..., 1:]], -1)
+    need = np.where(window, np.abs(side * half - local[..., 0]), 0.0)
+    shift = _sweep(need, np.linalg.norm(np.diff(strands, axis=1), axis=-1))
+    shift[:, 0] = 0.0  # roots stay where they grew
+    x = local[..., 0] + side * shift
+    across = ~window & (local[..., 2] > 0.2 * rz) & (np.abs(x) < half)  # bent from the far side into the face
+    local[..., 0] = np.where(across, local[..., 0], x)
     return local @ B + scalp.origin
+
+
+SWEEP_SLOPE = 1.5  # metres sideways per metre of strand, at most, as hair bends round the face
+
+
+def _sweep(need: np.ndarray, seg: np.ndarray, slope: float = SWEEP_SLOPE) -> np.ndarray:
+    """Sideways moves (N, K) for strand points that ``need`` (N, K) at least that much, spread
+    along each strand (segment lengths ``seg``, (N, K - 1)): each point moves at least as far
+    as the points along the strand need, less ``slope`` x the arc to them, so a strand bends
+    aside before the face and straightens after it (a root needs nothing: the window starts
+    below the hairline, so no root has a straight jump to make)."""
+    out = need.copy()
+    for j in range(need.shape[1] - 2, -1, -1):  # bend before a point that needs it
+        out[:, j] = np.maximum(out[:, j], out[:, j + 1] - slope * seg[:, j])
+    for j in range(1, need.shape[1]):  # and straighten after it
+        out[:, j] = np.maximum(out[:, j], out[:, j - 1] - slope * seg[:, j - 1])
+    return out
+
+
+CROWN_LIFT = 0.3  # curls over the forehead leave it upwards and back (as pushed back), not across the face
 
 
 def _comb(scalp: ScalpRegions, roots: np.ndarray, parting: str, part_x: float) -> np.ndarray:
     """Direction each root's hair is combed (unnormalised, world): away from the part line on
     the top of the head (``side``/``centre``: x = ``part_x`` of the head's half width, running
     from the hairline back to the crown), radially from the crown behind it and on the sides,
-    straight back for ``back``, out from the top for ``crown`` (curls and afros)."""
+    straight back for ``back``, out from the top for ``crown`` (curls and afros; over the
+    forehead back and up, ``CROWN_LIFT``, as curls pushed back from the face)."""
     B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     right, up, fwd = B
     local = (roots - scalp.origin) @ B.T / scalp.skull
@@ -242,8 +267,9 @@ def _comb(scalp: ScalpRegions, roots: np.ndarray, parting: str, part_x: float) -
             side * right * (1 - 0.5 * brow) - (0.25 + 0.8 * brow) * fwd)
     elif parting == "back":
         away = np.where(local[:, 1:2] > 0.2, -fwd + 0.3 * np.sign(local[:, :1]) * right * np.abs(local[:, :1]), away)
-    else:  # crown: away from the top of the head
-        away = local[:, :1] * right + local[:, 2:] * fwd + 0.2 * (local[:, 2:] < 0) * -fwd
+    else:  # crown: away from the top of the head, and back from the face over the forehead
+        ahead = np.clip(local[:, 2:], 0.0, None)
+        away = local[:, :1] * right + ahead * (CROWN_LIFT * up - fwd) + 0.2 * (local[:, 2:] < 0) * -fwd
     front = np.clip(local[:, 2:], 0, None) * (local[:, 1:2] < 0.2)  # temples: towards the back, off the face
     return away - 1.2 * front * fwd - 0.3 * up
 
@@ -478,8 +504,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
     parts = []
     n_total = int(STRANDS[0] + (STRANDS[1] - STRANDS[0]) * params.density)
     top = BANGS_TOP if params.style == "fringe" else HAIRLINE_TOP  # bangs may reach the brows
-    if parting != "crown":  # combed from a part or back: the scalp above the hairline keeps its hair
-        top = min(top, hairline_height(scalp))  # (curls and afros still frame the face from higher up)
+    top = min(top, hairline_height(scalp))  # the scalp above the hairline keeps its hair
     for r_idx in range(5):
         L = style.lengths[r_idx] * params.length
         mask = face_region == r_idx
