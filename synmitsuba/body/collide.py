@@ -67,21 +67,29 @@ def neighbour_mean(faces: np.ndarray, n: int):
     return sparse.diags(1.0 / np.asarray(A.sum(1)).ravel()) @ A
 
 
+COVER_NEAR = 0.5  # a garment point is over a vertex if the body vertex nearest it is this x its height from it, or nearer
+
+
 def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, where: np.ndarray | None = None,
                   lateral: float = 0.015, highest: float = 0.15) -> np.ndarray:
     """(V,) how far the garments worn over each body vertex stand out along its normal: the
     farthest that the tangent planes at the 8 nearest vertices of each garment (``layers``:
     (rest vertices, faces) pairs) meet the normal's line, counting the vertices within
-    ``lateral`` metres of the line (a collar's edge is beside the neck, not over it). Hair is
-    laid over this shell: 3 mm over the body, long hair went under a jacket at the back and
-    came out at its tips. Only at the vertices ``where`` (a mask) when given, 0 elsewhere."""
+    ``lateral`` metres of the line (a collar's edge is beside the neck, not over it) and
+    nearest the body near the vertex: within ``lateral`` or ``COVER_NEAR`` x that height of it
+    (a top's chest, 12 cm along the normal under the chin, lies over the chest, not the chin;
+    a collar 8 cm below the back of the skull lies over the neck). Hair is laid over this shell:
+    3 mm over the body, long hair went under a jacket at the back and came out at its tips.
+    Only at the vertices ``where`` (a mask) when given, 0 elsewhere."""
     from pykdtree.kdtree import KDTree
     out = np.zeros(len(vertices))
+    body = KDTree(np.ascontiguousarray(vertices, dtype=np.float64))
     ids = np.arange(len(vertices)) if where is None else np.flatnonzero(where)
     v, normals = np.ascontiguousarray(vertices[ids], dtype=np.float64), normals[ids]
     lift = np.zeros(len(ids))
     for g, faces in layers:
         g = np.ascontiguousarray(g, dtype=np.float64)
+        under = vertices[body.query(g, k=1)[1].astype(np.int64)]  # (G, 3): the body vertex each lies over
         _, near = KDTree(g).query(v, k=8)  # not only the nearest: under a rolled hem that is its inside
         near = near.astype(np.int64)
         d = g[near] - v[:, None]
@@ -91,7 +99,9 @@ def cover_heights(vertices: np.ndarray, normals: np.ndarray, layers: list, where
         gn = _normals(g, np.asarray(faces), incidence(faces, len(g)))[near]
         facing = np.einsum("nki,nki->nk", np.broadcast_to(n, gn.shape), gn)
         h = np.where(facing > 0.5, np.einsum("nki,nki->nk", d, gn) / np.maximum(facing, 0.5), h)  # curved shells
-        lift = np.maximum(lift, np.where((h > 0) & (h < highest) & (side < lateral), h, 0.0).max(1))
+        off = np.linalg.norm(under[near] - v[:, None], axis=2)
+        over = (h > 0) & (h < highest) & (side < lateral) & (off <= np.maximum(lateral, COVER_NEAR * h))
+        lift = np.maximum(lift, np.where(over, h, 0.0).max(1))
     out[ids] = lift
     return out
 
