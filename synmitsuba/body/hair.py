@@ -204,7 +204,7 @@ def hairline_height(scalp: ScalpRegions) -> float:
 
 def _clear_face(scalp: ScalpRegions, strands: np.ndarray, top: float) -> np.ndarray:
     """Strands (N, K, 3) with every point that hangs in front of the face moved sideways to its
-    edge, on its root's side: long hair falls beside the face, as combed hair does, instead of
+    edge, on the side the strand lies on (mostly its root's): long hair falls beside the face, as combed hair does, instead of
     a curtain over the eyes. The face is an oval ahead of the head's centre: ``FACE_HALF_WIDTH``
     of the head's half width up to the centre's height, rounding off to ``top`` (relative
     height) above it, so hair sliding around it frames the face instead of cutting straight
@@ -213,7 +213,7 @@ def _clear_face(scalp: ScalpRegions, strands: np.ndarray, top: float) -> np.ndar
     B = frame(scalp.forward, scalp.up).T  # rows: right, up, forward
     local = (strands - scalp.origin) @ B.T
     rx, ry, rz = scalp.radii
-    side = np.where(local[:, :1, 0] >= 0, 1.0, -1.0)  # the root's side, for the whole strand
+    side = np.where(local[..., 0].mean(1, keepdims=True) >= 0, 1.0, -1.0)  # the side the strand lies on, for all of it
     rise = np.clip(local[..., 1] / (top * ry), 0.0, None)
     half = FACE_HALF_WIDTH * rx * np.sqrt(np.clip(1.0 - rise ** 2, 0.0, None))
     window = (local[..., 2] > 0.2 * rz) & (np.abs(local[..., 0]) < half)
