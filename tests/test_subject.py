@@ -492,6 +492,22 @@ def test_curls_leave_the_forehead_without_straight_streaks(human):
         assert seg.max() < 0.03, (style, seg.max(), int((seg >= 0.03).sum()))
 
 
+def test_hair_passes_over_an_ear_without_jumps():
+    """Straight strands (points 5 mm apart) falling past an ear, from 1 cm inside it to 3 cm
+    out, are moved out of the ear's clearance sphere smoothly: every point at least
+    ``EAR_CLEARANCE`` from the ear, no segment longer than 15 mm (measured 13.7). Moved
+    radially from the ear, points either side of it went to opposite sides of the sphere
+    (35 mm segments), and a point on the ear stayed there."""
+    from synmitsuba.body.hair import EAR_CLEARANCE, _over_ears
+    ear = np.array([0.08, 0.0, 0.0])
+    dx, dz = np.meshgrid(np.linspace(-0.01, 0.03, 9), np.linspace(-0.03, 0.03, 13))
+    y = np.linspace(0.06, -0.06, 25)
+    strands = np.stack(np.broadcast_arrays((ear[0] + dx.ravel())[:, None], y[None, :], dz.ravel()[:, None]), -1)
+    out = _over_ears(strands, ear[None], np.zeros(3))
+    assert np.linalg.norm(out[:, 1:] - ear, axis=2).min() >= EAR_CLEARANCE - 1e-9
+    assert np.linalg.norm(np.diff(out, axis=1), axis=2).max() < 0.015
+
+
 def test_an_afro_is_a_rounded_mass_of_coils(human):
     """Seen from the front, an afro's outline is round (the farthest strand point in each 5-deg
     sector varies little from sector to sector, and sideways it reaches no farther than it

@@ -388,16 +388,22 @@ def _off_body(strands: np.ndarray, body) -> np.ndarray:
 EAR_CLEARANCE = 0.035  # metres kept between a strand point and an ear keypoint
 
 
-def _over_ears(strands: np.ndarray, ears: np.ndarray) -> np.ndarray:
+def _over_ears(strands: np.ndarray, ears: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """Strand points (roots aside) within ``EAR_CLEARANCE`` of an ear keypoint moved out to it,
     away from the ear: the ear is a thin fold whose inside the tangent-plane test of
-    ``_off_body`` cannot see, so hair lies over it instead of through it."""
+    ``_off_body`` cannot see, so hair lies over it instead of through it. Each point moves along
+    the ray from the sphere's innermost point (towards the head's ``centre``), not from the
+    ear: two neighbouring points either side of the ear went to opposite sides of the sphere,
+    a straight jump of up to 7 cm in a curl passing over it."""
     out = strands.copy()
     rest = out[:, 1:]
     for ear in np.asarray(ears, float).reshape(-1, 3):
-        rel = rest - ear
-        dist = np.linalg.norm(rel, axis=-1, keepdims=True)
-        rest[...] = np.where(dist < EAR_CLEARANCE, ear + rel / np.maximum(dist, 1e-9) * EAR_CLEARANCE, rest)
+        outward = (ear - centre) / max(float(np.linalg.norm(ear - centre)), 1e-9)
+        inner = ear - EAR_CLEARANCE * outward  # on the sphere: its rays leave it once, on the far side
+        u = rest - inner
+        u /= np.maximum(np.linalg.norm(u, axis=-1, keepdims=True), 1e-12)
+        onto = inner + 2 * EAR_CLEARANCE * np.clip((u * outward).sum(-1, keepdims=True), 0.0, None) * u
+        rest[...] = np.where(np.linalg.norm(rest - ear, axis=-1, keepdims=True) < EAR_CLEARANCE, onto, rest)
     return out
 
 
@@ -537,7 +543,7 @@ def grow_hair(params: HairParams, scalp: ScalpRegions, body=None, ears=None) -> 
             parts.append(Strands(pts, _taper(len(pts), 0.6), np.full(len(pts), 5)))
     hair = Strands.concat(parts)
     if ears is not None and len(hair):
-        hair.points = _over_ears(hair.points, ears)
+        hair.points = _over_ears(hair.points, ears, scalp.origin)
     if body is not None and len(hair):
         hair.points = _off_body(hair.points, body)
     return hair
