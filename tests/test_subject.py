@@ -492,6 +492,33 @@ def test_curls_leave_the_forehead_without_straight_streaks(human):
         assert seg.max() < 0.03, (style, seg.max(), int((seg >= 0.03).sum()))
 
 
+def test_hair_goes_under_a_collar_standing_off_the_nape_and_over_a_jacket():
+    """A flat body (y = 0, normals up) under garments standing 6 cm over it for x > 0 (a collar
+    well off the nape) or 2 cm (a jacket's back): strands lying 5 mm over the body and running
+    into them from x < 0 stay 3 mm over the body under the collar, with no segment longer than
+    it was (lifted over it, the first point past its edge jumped 6 cm: the tails of a crew cut
+    over a loose collar), and are lifted over the jacket."""
+    from synmitsuba.body.collide import Surface, incidence
+    from synmitsuba.body.hair import BODY_MARGIN, _off_body
+    x, z = np.meshgrid(np.linspace(-0.1, 0.1, 41), np.linspace(-0.1, 0.1, 41))
+    verts = np.stack([x.ravel(), np.zeros(x.size), z.ravel()], 1)
+    grid = np.arange(x.size).reshape(x.shape)
+    quads = np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], -1).reshape(-1, 4)
+    faces = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    bare = Surface.of(verts, faces, incidence(faces, len(verts)))
+    assert bare.normals[:, 1].min() > 0.99
+    xs = np.linspace(-0.03, 0.05, 17)
+    strands = np.stack(np.broadcast_arrays(xs[None, :], 0.005, np.linspace(-0.05, 0.05, 11)[:, None]), -1)
+    for lift, under in ((0.06, True), (0.02, False)):
+        out = _off_body(strands, bare.lifted(np.where(verts[:, 0] > 0, lift, 0.0)))
+        beyond = out[:, xs > 0.01, 1]
+        if under:
+            assert np.allclose(beyond, 0.005), beyond.max()
+            assert np.linalg.norm(np.diff(out, axis=1), axis=2).max() <= 0.0051
+        else:
+            assert (beyond >= lift + BODY_MARGIN - 1e-9).all(), beyond.min()
+
+
 def test_hair_passes_over_an_ear_without_jumps():
     """Straight strands (points 5 mm apart) falling past an ear, from 1 cm inside it to 3 cm
     out, are moved out of the ear's clearance sphere smoothly: every point at least

@@ -366,13 +366,36 @@ def _children(guide_roots, guides, roots, key_g, key_c, clump, frizz, curl, rng)
 BODY_MARGIN = 0.003  # metres kept between a strand and the body's surface
 
 
+TUCK_PUSH = 0.04  # metres: a strand point this far under the garments' shell goes under them, with the rest of its strand
+
+
 def _off_body(strands: np.ndarray, body) -> np.ndarray:
     """Strands (N, K, 3) with every point but the root lifted ``BODY_MARGIN`` over the body
     (a ``collide.Surface``: height over the nearest vertex's tangent plane); the points that
     moved are checked again, four rounds in all, for the folds where the nearest vertex
-    changes (neck, shoulders)."""
+    changes (neck, shoulders). From its first point ``TUCK_PUSH`` or more under the garments
+    the surface is lifted by (a collar standing well off the nape), a strand stays under them,
+    over the body alone: lifted over such a collar, a crew cut's nape hairs were stretched
+    into 20 cm tails sticking out over it (a jacket's back, 1-3 cm over the body, is not deep
+    enough: long hair lies over it)."""
+    import dataclasses
+    rest = strands[:, 1:].reshape(-1, 3)
+    under = np.zeros(len(rest), bool)
+    if getattr(body, "lift", None) is not None and len(rest):
+        deep = (BODY_MARGIN - body.depth(rest)[0] > TUCK_PUSH).reshape(len(strands), -1)
+        under = (np.cumsum(deep, axis=1) > 0).ravel()
     out = strands.copy()
-    rest = out[:, 1:].reshape(-1, 3)
+    lifted = rest.copy()
+    for group, surface in ((~under, body), (under, dataclasses.replace(body, lift=None) if under.any() else body)):
+        if group.any():
+            lifted[group] = _lift_over(rest[group], surface)
+    out[:, 1:] = lifted.reshape(len(strands), -1, 3)
+    return out
+
+
+def _lift_over(points: np.ndarray, body) -> np.ndarray:
+    """Points (M, 3) lifted ``BODY_MARGIN`` over ``body`` (``_off_body``)."""
+    rest = points.copy()
     todo = np.arange(len(rest))
     for _ in range(4):
         height, normals = body.depth(rest[todo])
@@ -381,8 +404,7 @@ def _off_body(strands: np.ndarray, body) -> np.ndarray:
         todo = todo[push > 0]
         if not len(todo):
             break
-    out[:, 1:] = rest.reshape(len(out), -1, 3)
-    return out
+    return rest
 
 
 EAR_CLEARANCE = 0.035  # metres kept between a strand point and an ear keypoint
