@@ -497,9 +497,10 @@ def test_hair_goes_under_a_collar_standing_off_the_nape_and_over_a_jacket():
     well off the nape) or 2 cm (a jacket's back): strands lying 5 mm over the body and running
     into them from x < 0 stay 3 mm over the body under the collar, with no segment longer than
     it was (lifted over it, the first point past its edge jumped 6 cm: the tails of a crew cut
-    over a loose collar), and are lifted over the jacket."""
+    over a loose collar), and are lifted over the jacket; posed strands walked again
+    (``off_garments``) keep the same rule."""
     from synmitsuba.body.collide import Surface, incidence
-    from synmitsuba.body.hair import BODY_MARGIN, _off_body
+    from synmitsuba.body.hair import BODY_MARGIN, HAIR_CLEARANCE, _off_body, off_garments
     x, z = np.meshgrid(np.linspace(-0.1, 0.1, 41), np.linspace(-0.1, 0.1, 41))
     verts = np.stack([x.ravel(), np.zeros(x.size), z.ravel()], 1)
     grid = np.arange(x.size).reshape(x.shape)
@@ -517,6 +518,9 @@ def test_hair_goes_under_a_collar_standing_off_the_nape_and_over_a_jacket():
             assert np.linalg.norm(np.diff(out, axis=1), axis=2).max() <= 0.0051
         else:
             assert (beyond >= lift + BODY_MARGIN - 1e-9).all(), beyond.min()
+        shell = bare.lifted(np.where(verts[:, 0] > 0, lift, 0.0))
+        walked = off_garments(strands[:, xs > 0.01].reshape(-1, 3), shell, bare)[:, 1]
+        assert np.allclose(walked, 0.005 if under else lift + HAIR_CLEARANCE), (lift, walked.min(), walked.max())
 
 
 def test_hair_passes_over_an_ear_without_jumps():

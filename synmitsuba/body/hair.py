@@ -635,6 +635,21 @@ STRETCH = 1.15  # a posed strand segment may be at most this many times its rest
 HAIR_CLEARANCE = 0.002  # metres a walked strand's points are kept off the posed body and its garments
 
 
+def off_garments(points: np.ndarray, shell, body, margin: float = HAIR_CLEARANCE) -> np.ndarray:
+    """Posed strand points (M, 3) moved ``margin`` over ``shell`` (the posed body lifted by the
+    garments over it) along its nearest normal, except those ``TUCK_PUSH`` or more under it (under
+    a collar standing off the nape, where ``_off_body`` left them at rest): those are kept
+    ``margin`` over the ``body`` alone, instead of thrown out over the collar when a turned head
+    stretches their strand and it is walked again (``limit_stretch``)."""
+    height, normals = shell.depth(points)
+    push = margin - height
+    under = push > TUCK_PUSH
+    if under.any():
+        bare_height, normals[under] = body.depth(points[under])
+        push[under] = margin - bare_height
+    return points + np.clip(push, 0.0, None)[:, None] * normals
+
+
 def limit_stretch(points: np.ndarray, rest: np.ndarray, clear=None, limit: float = STRETCH) -> np.ndarray:
     """Skinned strands (N, K, 3) whose segments grew past ``limit`` times their ``rest`` lengths
     (N, K - 1) walked again from the root out: each segment keeps its skinned direction and at

@@ -21,8 +21,8 @@ from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSIT
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
-from synmitsuba.body.hair import (HAIR_CLEARANCE, Strands, follow_weights, grow_hair, hair_colour, hair_material,
-                                  limit_stretch, reach, root_cover, scalp_regions_from_head, strand_melanin)
+from synmitsuba.body.hair import (Strands, follow_weights, grow_hair, hair_colour, hair_material,
+                                  limit_stretch, off_garments, reach, root_cover, scalp_regions_from_head, strand_melanin)
 from synmitsuba.body.lbs import bone_transforms, skin
 from synmitsuba.body.skeleton import forward_kinematics
 from synmitsuba.body.mouth import fit_helper, fit_jaw, jaws, mouth_materials
@@ -495,10 +495,8 @@ class LayeredHuman:
         scalp = np.flatnonzero(self.hair.region < 5)
         shell = surface.lifted(self.hair_lift)
 
-        def clear(q: np.ndarray) -> np.ndarray:
-            height, normals = shell.depth(q)  # the nearest vertex's tangent plane: a garment's test is
-            # exact where it matters, for hair a few millimetres do not show
-            return q + np.clip(HAIR_CLEARANCE - height, 0.0, None)[:, None] * normals
+        def clear(q: np.ndarray) -> np.ndarray:  # the nearest vertex's tangent plane: a garment's test
+            return off_garments(q, shell, surface)  # is exact where it matters, for hair mm do not show
 
         pts[scalp] = limit_stretch(pts[scalp], self._strand_rest, clear)
         return pts
