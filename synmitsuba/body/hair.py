@@ -381,14 +381,15 @@ def _off_body(strands: np.ndarray, body) -> np.ndarray:
     import dataclasses
     rest = strands[:, 1:].reshape(-1, 3)
     under = np.zeros(len(rest), bool)
-    if getattr(body, "lift", None) is not None and len(rest):
+    if body.lift is not None and len(rest):
         deep = (BODY_MARGIN - body.depth(rest)[0] > TUCK_PUSH).reshape(len(strands), -1)
         under = (np.cumsum(deep, axis=1) > 0).ravel()
-    out = strands.copy()
     lifted = rest.copy()
-    for group, surface in ((~under, body), (under, dataclasses.replace(body, lift=None) if under.any() else body)):
-        if group.any():
-            lifted[group] = _lift_over(rest[group], surface)
+    if (~under).any():
+        lifted[~under] = _lift_over(rest[~under], body)
+    if under.any():
+        lifted[under] = _lift_over(rest[under], dataclasses.replace(body, lift=None))
+    out = strands.copy()
     out[:, 1:] = lifted.reshape(len(strands), -1, 3)
     return out
 
