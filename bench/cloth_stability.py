@@ -13,8 +13,11 @@ frame), every vertex finite, the largest distance of a simulated vertex from the
 skinned and the largest step of a vertex between frames (an exploding vertex shows in both;
 the stage raises ``ClothError`` past ``ClothSettings.max_drift``, 1 m), the largest distance of
 a simulated vertex from the body's nearest vertex (a hem that swings far from where the skinned
-one is but stays by the legs is cloth; one that flies off is not; rows logged before this was measured lack it),
-and the seconds.
+one is but stays by the legs is cloth; one that flies off is not; rows logged before this was measured lack it), the largest stretch
+of a simulated cloth edge (a free particle at one end or both) past its rest length (the
+cloth as put on; a torn or spiked piece shows here first: rows logged before this was
+measured lack it), the seconds, and the code's git revision
+(``rev``: rows logged before it was recorded lack it).
 Prints a JSON summary of the whole log (clips over half a metre in either: worth a look).
 
     python bench/cloth_stability.py [--clips 1000] [--seconds 1.0] [--log bench/cloth_stability.jsonl]
@@ -66,6 +69,7 @@ def run_clip(k: int, seconds: float) -> dict:
         return {**row, "status": type(exc).__name__, "error": repr(exc)[:300], "seconds": round(time.perf_counter() - t, 1)}
     seconds_taken = time.perf_counter() - t
     from scipy.spatial import cKDTree
+    stretch = max_stretch(human, clip, track)
     finite, drift, step, off = True, 0.0, 0.0, 0.0
     for f in range(clip.n_frames):
         posed = human.pose(*clip.frame(f), face=clip.face_at(f))
@@ -80,7 +84,30 @@ def run_clip(k: int, seconds: float) -> dict:
             if f:
                 step = max(step, float(np.linalg.norm(v[f] - v[f - 1], axis=1).max()))
     return {**row, "status": "ok", "finite": finite, "max_drift_m": round(drift, 4), "max_step_m": round(step, 4),
-            "max_off_body_m": round(off, 4), "seconds": round(seconds_taken, 1)}
+            "max_off_body_m": round(off, 4), "max_stretch_m": round(stretch, 4), "seconds": round(seconds_taken, 1)}
+
+
+def max_stretch(human, clip, track) -> float:
+    """Metres the most stretched edge of any simulated garment with a free particle at an end
+    (held ones follow the skinned garment) is longer than at rest (where the cloth stage puts
+    the cloth on, which sets the solver's rest lengths), over every frame."""
+    import synmitsuba as sm
+    from synmitsuba.cloth.lead import Schedule
+    from synmitsuba.cloth.simulate import cloth_inputs
+    s = sm.ClothSettings()
+    garments, collider = cloth_inputs(human, clip, s)
+    rest, start, out = Schedule.of(collider, s).start()[1], 0, 0.0
+    for g in garments:
+        r = rest[start:start + len(g.rows)]
+        start += len(g.rows)
+        f = g.piece.faces
+        e = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)
+        e = e[~g.piece.held[e].all(axis=1)]
+        length0 = np.linalg.norm(r[e[:, 0]] - r[e[:, 1]], axis=1)
+        q = track.frames[g.name][:, g.rows]
+        length = np.linalg.norm(q[:, e[:, 0]] - q[:, e[:, 1]], axis=2)
+        out = max(out, float((length - length0).max()))
+    return out
 
 
 def read_log(path: str) -> list[dict]:
@@ -101,9 +128,20 @@ def summary(rows: list[dict]) -> dict:
             "max_step_m": max((r["max_step_m"] for r in ok), default=None),
             "max_off_body_m": max((r["max_off_body_m"] for r in ok if "max_off_body_m" in r), default=None),
             "clips_measured_off_body": sum("max_off_body_m" in r for r in ok),
+            "max_stretch_m": max((r["max_stretch_m"] for r in ok if "max_stretch_m" in r), default=None),
+            "clips_measured_stretch": sum("max_stretch_m" in r for r in ok),
             "garments": {g: sum(g in r["garments"] for r in rows) for g in sorted({g for r in rows for g in r["garments"]})},
             "motions": {m: sum(r["motion"] == m for r in rows) for m in sorted({r["motion"] for r in rows})},
             "median_seconds_per_clip": float(np.median([r["seconds"] for r in rows])) if rows else None}
+
+
+def _revision() -> str:
+    """The checkout's commit, ``+dirty`` when its tracked code differs from it."""
+    import subprocess
+    def git(*a):
+        return subprocess.run(["git", *a], cwd=HERE, capture_output=True, text=True).stdout.strip()
+    dirty = git("status", "--porcelain", "--untracked-files=no", "--", "../synmitsuba")
+    return git("rev-parse", "--short", "HEAD") + ("+dirty" if dirty else "")
 
 
 def main(argv=None) -> dict:
@@ -116,13 +154,13 @@ def main(argv=None) -> dict:
                     help="first clip to run; clips already in the log are skipped (two processes sharing one log "
                          "take two ranges, e.g. --from 0 and --from 500)")
     args = ap.parse_args(argv)
-    start = time.perf_counter()
+    start, rev = time.perf_counter(), _revision()
     for k in range(args.first, args.clips):
         if args.until is not None and time.perf_counter() - start > args.until:
             break
         if k in {r["clip"] for r in read_log(args.log)}:  # re-read: another process may share the log
             continue
-        row = run_clip(k, args.seconds)
+        row = {**run_clip(k, args.seconds), "rev": rev}
         with open(args.log, "a") as fh:  # one line, one write: appends from two processes do not interleave
             fh.write(json.dumps(row) + "\n")
     return summary(sorted(read_log(args.log), key=lambda r: r["clip"]))

@@ -314,6 +314,57 @@ def test_a_diverging_cloth_is_an_error_naming_it_and_the_frame():
         _sphere_drape(frames=2, max_drift=1e-4)
 
 
+def _dragged_corner(max_stretch: float) -> np.ndarray:
+    """The hanging square with its bottom corner caught (held) and pulled out of the plane at
+    4.5 m/s: what a running hand did to a shift's vertex (issue 34's stability clip 164)."""
+    q0, faces, held = _hanging_square()
+    corner = np.argmin(q0[:, 0] + q0[:, 1])
+    held[corner] = True
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.05)
+
+    def at(f: int):
+        q = q0.copy()
+        q[corner, 2] += 0.15 * max(f, 0)
+        return ball.vertices + [3.0, 0.5, 0.0], q
+    collider = Collider(np.asarray(ball.faces), at, 30.0, 8)
+    return drape([ClothPiece(faces, held, FABRICS["woven"])], collider,
+                 ClothSettings(settle_s=0.2, max_drift=10.0, max_stretch=max_stretch), names=["square"])
+
+
+def test_a_torn_cloth_is_an_error_at_the_frame_an_edge_passes_max_stretch():
+    """Each frame's longest stretch past rest, measured here from the edges of the square's
+    grid, passes 20 cm at some frame: the stage raises at that frame and names the piece."""
+    q0, faces, _ = _hanging_square()
+    q = _dragged_corner(max_stretch=10.0)
+    a, b = np.concatenate([faces[:, 0], faces[:, 1], faces[:, 2]]), np.concatenate([faces[:, 1], faces[:, 2], faces[:, 0]])
+    stretch = (np.linalg.norm(q[:, a] - q[:, b], axis=2) - np.linalg.norm(q0[a] - q0[b], axis=1)).max(axis=1)
+    torn = np.flatnonzero(stretch > 0.2)
+    assert len(torn) and torn[0] > 0, stretch
+    with pytest.raises(ClothError, match=rf"square diverged at clip frame {torn[0]} \(an edge stretched"):
+        _dragged_corner(max_stretch=0.2)
+
+
+@pytest.mark.parametrize("dress", ["shift", "wrap"])
+def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress):
+    """The solver's pull on a particle scales with the area of its triangles: a shift's free
+    particle whose triangles were slivers (1 % of the median particle's area, where the bodice
+    meets the skirt) was thrown off by a running hand and never came back (issue 34's stability
+    clip 164: 1.1 m from its neighbours). Areas from trimesh; the free particles are the
+    solver's active ones."""
+    import synmitsuba as sm
+    from synmitsuba.cloth.simulate import simulated_garments
+    recipe = sm.sample_subject(np.random.default_rng(3), {"outfit": [dress], "jacket": False, "cloth": "simulated",
+                                                          "texture_size": 64})
+    human = sm.build_subject(recipe)
+    (g,) = simulated_garments(human)
+    mesh = trimesh.Trimesh(human.parts[g.part].rest[g.rows], g.piece.faces, process=False)
+    area = np.zeros(len(mesh.vertices))
+    np.add.at(area, mesh.faces.ravel(), np.repeat(mesh.area_faces, 3))
+    free = ~g.piece.held
+    assert free.sum() > 0.4 * len(free)  # the skirt hangs free
+    assert area[free].min() >= 0.15 * np.median(area[area > 0]), np.sort(area[free])[:5] / np.median(area)
+
+
 def _skirt_subject(cloth: str = "simulated"):
     import synmitsuba as sm
     recipe = sm.sample_subject(np.random.default_rng(5), {"outfit": ["tshirt", "skirt"], "jacket": False,
