@@ -134,19 +134,24 @@ class PlacedSubject:
     prefix: str
     fits: dict = field(default_factory=dict)  # body-model fits by kind ("smplx", "smpl"): annotate.smplx_fit
     simulated: bool = False  # the recipe's cloth: simulated
-    cloth_motion: Motion | None = None  # the clip before its eyes were aimed: what the cloth hangs on
+    cloth_motion: Motion | None = None  # the clip before its eyes were aimed and before it was started at
+    # ``cloth_start``: what the cloth hangs on, in one piece (rolled, a walk's root jumps back 0.58 m where it
+    # wraps round, and a skirt simulated through the jump flew up to the waist)
+    cloth_start: int = 0
     _cloth: ClothTrack | None = field(default=None, repr=False)
 
     @property
     def cloth(self) -> ClothTrack | None:
         """The simulated garments over the clip (None when skinned), simulated on first use
         (labels that need no render, e.g. body-model fits, never pay for it) against
-        ``cloth_motion``: aiming the eyes (composition does it after building the scene) moves
-        no cloth, and a subject rebuilt from its spec hangs the same cloth bit for bit."""
+        ``cloth_motion`` and started where the clip is: aiming the eyes (composition does it
+        after building the scene) moves no cloth, and a subject rebuilt from its spec hangs the
+        same cloth bit for bit."""
         if not self.simulated:
             return None
         if self._cloth is None:
-            self._cloth = simulate_cloth(self.human, self.cloth_motion or self.motion)
+            track = simulate_cloth(self.human, self.cloth_motion or self.motion)
+            self._cloth = track.rolled(self.cloth_start) if track is not None and self.cloth_motion else track
         return self._cloth
 
     def garments_at(self, time: float) -> dict | None:
@@ -269,11 +274,10 @@ def placed_subject(s: SubjectSpec, i: int, human: LayeredHuman | None = None) ->
     its clip retargeted, placed, started at ``s.motion.start``, its hands, face and eyes set."""
     human = build_subject(s.recipe) if human is None else human
     clip = with_face(with_hands(retargeted_clip(human, s.motion, f"subjects[{i}].motion"), s.hands), s.face)
-    motion = place_motion(clip, s.position, s.yaw_deg, s.lift)
-    if s.motion.start:
-        motion = motion.rolled(s.motion.start)
+    placed = place_motion(clip, s.position, s.yaw_deg, s.lift)
+    motion = placed.rolled(s.motion.start) if s.motion.start else placed
     return PlacedSubject(human, aimed(motion, s.gaze), 0, s.instance, f"subject{i}",
-                         simulated=human.recipe.cloth == "simulated", cloth_motion=motion)
+                         simulated=human.recipe.cloth == "simulated", cloth_motion=placed, cloth_start=s.motion.start)
 
 
 def draw_hands(rng: np.random.Generator, motion: Motion) -> HandTrack:
