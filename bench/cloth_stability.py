@@ -132,7 +132,9 @@ def summary(rows: list[dict]) -> dict:
             "clips_measured_stretch": sum("max_stretch_m" in r for r in ok),
             "garments": {g: sum(g in r["garments"] for r in rows) for g in sorted({g for r in rows for g in r["garments"]})},
             "motions": {m: sum(r["motion"] == m for r in rows) for m in sorted({r["motion"] for r in rows})},
-            "median_seconds_per_clip": float(np.median([r["seconds"] for r in rows])) if rows else None}
+            "median_seconds_per_clip": float(np.median([r["seconds"] for r in rows])) if rows else None,
+            "clips_by_revision": {v: sum(r.get("rev", "before revisions were logged") == v for r in rows)
+                                  for v in sorted({r.get("rev", "before revisions were logged") for r in rows})}}
 
 
 def _revision() -> str:
