@@ -344,28 +344,6 @@ def test_a_torn_cloth_is_an_error_at_the_frame_an_edge_passes_max_stretch():
         _dragged_corner(max_stretch=0.2)
 
 
-def _ball_over_a_sheet(slippery: bool) -> np.ndarray:
-    """x moved, per particle, of a sheet lying on the ground while a ball pressed 12 mm into it
-    (onto the ground under it) slides 18 cm along it in 9 frames: a hand pressing a skirt
-    against a thigh."""
-    q0, faces = _square(17, 0.4, 0.005)
-    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
-    collider = Collider(np.asarray(ball.faces), lambda f: (ball.vertices + [-0.1 + 0.02 * max(f, 0), 0.042, 0.0], q0),
-                        30.0, 10, slippery=np.full(len(ball.faces), slippery))
-    q = drape([ClothPiece(faces, np.zeros(len(q0), bool), FABRICS["woven"])], collider, ClothSettings(settle_s=0.2),
-              names=["sheet"])
-    return q[-1, :, 0] - q[0, :, 0]
-
-
-def test_slippery_collider_faces_slide_over_the_cloth_without_dragging_it():
-    """With friction the ball drags the sheet along (measured: 9 cm on average, 17 cm at most);
-    slippery, it slides over it (1.4 mm at most). The body's hands are slippery: a walking
-    hand dragged a pleated skirt's side up to the waist, an edge 13 cm past its rest length,
-    0.7 cm with the hands slippery (issue 34's stability clip 171)."""
-    assert _ball_over_a_sheet(slippery=False).mean() > 0.03
-    assert np.abs(_ball_over_a_sheet(slippery=True)).max() < 0.005
-
-
 @pytest.mark.parametrize("dress", ["shift", "wrap"])
 def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress):
     """The solver's pull on a particle scales with the area of its triangles: a shift's free

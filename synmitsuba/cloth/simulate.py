@@ -144,9 +144,6 @@ class Collider:
     # particles moved out of the collider, after each frame (the solver's contacts are soft)
     lead: Callable[[float], tuple[np.ndarray, np.ndarray]] | None = None  # as ``at``, from w = 0 (where the cloth
     # is put on) to w = 1 (frame 0), over ``ClothSettings.lead_s`` at the start of the settling
-    slippery: np.ndarray | None = None  # (T,) bool: faces that push the cloth without friction (the hands:
-    # with friction a walking hand dragged a pleated skirt's side up to the waist, an edge 13 cm past its
-    # rest length, issue 34's stability clip 171)
 
 
 @dataclass
@@ -267,8 +264,7 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
             q = seal.apply(body, q)
         return out_of_body(human, body, q, s.particle_radius / 2)
 
-    hands = (np.asarray(human.regions.group) == "hand")[human.body.faces].any(axis=1)
-    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead, slippery=hands)
+    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead)
 
 
 def _seals(human, garments: list[_Garment]) -> list[WaistSeal]:
@@ -310,22 +306,15 @@ def drape(pieces: list[ClothPiece], collider: Collider, settings: ClothSettings 
         return _run(pieces, collider, s, names)
 
 
-def _model(pieces: list[ClothPiece], faces: np.ndarray, slippery: np.ndarray | None, collider_v: np.ndarray,
-           q: np.ndarray, s: ClothSettings):
-    """Newton's model: the ground, the collider as one mesh with friction and one without (its
-    ``slippery`` faces; returned with their vertices, to move them), each piece as cloth of its
-    fabric, its held particles inactive (moved, not simulated)."""
+def _model(pieces: list[ClothPiece], faces: np.ndarray, collider_v: np.ndarray, q: np.ndarray, s: ClothSettings):
+    """Newton's model: the ground, the collider mesh (returned to move it), each piece as cloth
+    of its fabric, its held particles inactive (moved, not simulated)."""
     import newton
     import warp as wp
     builder = newton.ModelBuilder(up_axis=newton.Axis.Y)  # gravity along -y
     builder.add_ground_plane()
-    meshes = []
-    for part, mu in _collider_parts(faces, slippery, len(collider_v)):
-        mesh = newton.Mesh(collider_v[part.vertices].astype(np.float32), part.faces.astype(np.int32).ravel())
-        cfg = builder.default_shape_cfg.copy()
-        cfg.mu = mu
-        builder.add_shape_mesh(body=-1, mesh=mesh, cfg=cfg)
-        meshes.append((mesh, part.vertices))
+    mesh = newton.Mesh(collider_v.astype(np.float32), faces.astype(np.int32).ravel())
+    builder.add_shape_mesh(body=-1, mesh=mesh)
     start = 0
     for p in pieces:
         f, pts = p.fabric, q[start:start + len(p.held)].astype(np.float32)
@@ -345,35 +334,14 @@ def _model(pieces: list[ClothPiece], faces: np.ndarray, slippery: np.ndarray | N
     model.particle_flags = wp.array(flags, dtype=old.dtype)
     model.soft_contact_ke, model.soft_contact_kd = s.contact_stiffness, 1.0e-2
     model.soft_contact_mu = float(np.mean([p.fabric.friction for p in pieces]))
-    return model, meshes, held
-
-
-@dataclass
-class _Part:
-    faces: np.ndarray     # over ``vertices``
-    vertices: np.ndarray  # the collider's vertices it uses
-
-
-def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int) -> list[tuple[_Part, float]]:
-    """The collider's faces with friction (a Newton shape's default, 1: Newton takes the
-    geometric mean of it and the fabric's) and its ``slippery`` ones (0), each over the
-    vertices it uses (all ``n`` when none is slippery)."""
-    if slippery is None or not slippery.any():
-        return [(_Part(faces, np.arange(n)), 1.0)]
-    out = []
-    for pick, mu in ((~slippery, 1.0), (slippery, 0.0)):
-        if not pick.any():
-            continue
-        used, local = np.unique(faces[pick], return_inverse=True)
-        out.append((_Part(local.reshape(-1, 3), used), mu))
-    return out
+    return model, mesh, held
 
 
 def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: list[str]) -> np.ndarray:
     import newton
     plan = Schedule.of(collider, s)
     (body0, q0), start = plan.first, plan.start()
-    model, meshes, held = _model(pieces, collider.faces, collider.slippery, start[0], start[1], s)
+    model, mesh, held = _model(pieces, collider.faces, start[0], start[1], s)
     solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
                                       particle_self_contact_margin=s.self_contact_margin,
                                       particle_self_contact_gap=s.self_contact_margin / 2)
@@ -388,7 +356,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     for f in range(-plan.settle, collider.n_frames):
         now, moving = plan.at(f), plan.moving(f)
         if plan.lead and f == plan.lead - plan.settle:  # the arms are down: the body stands at frame 0, still
-            _move(meshes, body0, np.zeros_like(body0))
+            _move(mesh, body0, np.zeros_like(body0))
         n = _substeps(prev[0][near], now[0][near], s)
         dt = 1.0 / collider.fps / n
         if f == 1:
@@ -397,7 +365,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
         for k in range(n):
             w = (k + 1) / n
             if moving:
-                _move(meshes, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
+                _move(mesh, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
                 q = s0.particle_q.numpy()
                 q[held] = (prev[1] + w * (now[1] - prev[1]))[held]
                 s0.particle_q.assign(q)
@@ -468,11 +436,10 @@ def _substeps(before: np.ndarray, after: np.ndarray, s: ClothSettings) -> int:
     return int(np.clip(np.ceil(move / s.max_step), s.substeps, s.max_substeps))
 
 
-def _move(meshes: list, vertices: np.ndarray, velocities: np.ndarray) -> None:
-    for mesh, used in meshes:
-        mesh.mesh.points.assign(vertices[used].astype(np.float32))
-        mesh.mesh.velocities.assign(velocities[used].astype(np.float32))
-        mesh.mesh.refit()
+def _move(mesh, vertices: np.ndarray, velocities: np.ndarray) -> None:
+    mesh.mesh.points.assign(vertices.astype(np.float32))
+    mesh.mesh.velocities.assign(velocities.astype(np.float32))
+    mesh.mesh.refit()
 
 
 @dataclass
