@@ -30,7 +30,7 @@ from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
 from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.errors import ConfigError, SynMitsubaError
-from synmitsuba.geometry import rigid_fit, vertex_normals
+from synmitsuba.geometry import rigid_fit, triangle_areas, vertex_normals
 from synmitsuba.schema import POSITIVE, Check, Flag, Nested, Number, check_fields, optional, spec
 
 
@@ -195,9 +195,8 @@ def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
     its skirt, just under the held line, left a shift's vertex with 1 % of it, which a running
     hand threw off and the cloth never pulled back (1.1 m from its neighbours: issue 34's
     stability clip 164). Held, such a particle follows its garment as skinned."""
-    a, b, c = q[faces[:, 0]], q[faces[:, 1]], q[faces[:, 2]]
     area = np.zeros(len(q))
-    np.add.at(area, faces.ravel(), np.repeat(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1), 3))
+    np.add.at(area, faces.ravel(), np.repeat(triangle_areas(q[faces]), 3))
     return area < SLIGHT * np.median(area[area > 0])
 
 
