@@ -344,6 +344,44 @@ def test_a_torn_cloth_is_an_error_at_the_frame_an_edge_passes_max_stretch():
         _dragged_corner(max_stretch=0.2)
 
 
+def _ball_over_a_sheet(slippery: bool) -> np.ndarray:
+    """x moved, per particle, of a sheet lying on the ground while a ball pressed 12 mm into it
+    (onto the ground under it) slides 18 cm along it in 9 frames: a hand pressing a skirt
+    against a thigh."""
+    q0, faces = _square(17, 0.4, 0.005)
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
+    collider = Collider(np.asarray(ball.faces), lambda f: (ball.vertices + [-0.1 + 0.02 * max(f, 0), 0.042, 0.0], q0),
+                        30.0, 10, slippery=np.full(len(ball.faces), slippery))
+    q = drape([ClothPiece(faces, np.zeros(len(q0), bool), FABRICS["woven"])], collider, ClothSettings(settle_s=0.2),
+              names=["sheet"])
+    return q[-1, :, 0] - q[0, :, 0]
+
+
+def test_slippery_collider_faces_slide_over_the_cloth_without_dragging_it():
+    """With friction the ball drags the sheet along (measured: 9 cm on average, 17 cm at most);
+    slippery, it slides over it (1.4 mm at most). The body's hands are slippery: a walking
+    hand dragged a pleated skirt's side up to the waist, an edge 13 cm past its rest length,
+    0.7 cm with the hands slippery (issue 34's stability clip 171)."""
+    assert _ball_over_a_sheet(slippery=False).mean() > 0.03
+    assert np.abs(_ball_over_a_sheet(slippery=True)).max() < 0.005
+
+
+def test_the_body_is_cut_into_closed_collider_shapes_at_the_wrists():
+    """Newton tells a mesh's inside from the mesh: the body and hands cut apart but left open
+    at the wrists threw cloth near the cut off (9 of 37 stability clips raised). Each shape
+    is watertight (trimesh), and their volumes add up to the whole body's."""
+    from synmitsuba.cloth.simulate import _collider_parts, cloth_inputs
+    human = _skirt_subject()
+    _, collider = cloth_inputs(human, _walk(human, 0.2), ClothSettings())
+    v = collider.at(3)[0]
+    parts = _collider_parts(collider.faces, collider.slippery, len(v))
+    meshes = [trimesh.Trimesh(p.place(v), p.faces, process=False) for p in parts]
+    assert [p.mu for p in parts] == [1.0, 0.0] and all(len(p.loops) == 2 for p in parts)  # two wrists
+    assert all(m.is_watertight and m.is_winding_consistent for m in meshes)
+    whole = trimesh.Trimesh(v, collider.faces, process=False).volume
+    assert meshes[1].volume > 0.0002 and abs(meshes[0].volume + meshes[1].volume - whole) < 1e-6 * whole + 1e-9
+
+
 @pytest.mark.parametrize("dress", ["shift", "wrap"])
 def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress):
     """The solver's pull on a particle scales with the area of its triangles: a shift's free
@@ -363,6 +401,32 @@ def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress
     free = ~g.piece.held
     assert free.sum() > 0.4 * len(free)  # the skirt hangs free
     assert area[free].min() >= 0.15 * np.median(area[area > 0]), np.sort(area[free])[:5] / np.median(area)
+
+
+def test_a_welded_fin_on_a_dress_seam_leaves_the_cloth_mesh_manifold():
+    """The README's turn (``motion preview turn --outfit dress --seed 4``): the dress's two halves
+    each have a sliver on the seam line, back to back; welded, they are one triangle twice (a
+    fin), which Newton read as a non-manifold edge ("node_idx -1 is out of range" from its
+    colouring). The cloth stage drops the fin: every edge of the piece, counted here, joins at
+    most two triangles."""
+    import synmitsuba as sm
+    from synmitsuba.body.topology import weld
+    from synmitsuba.body.recipe import SubjectConfig
+    from synmitsuba.cloth.simulate import simulated_garments
+    from synmitsuba.motion.sources import load_motion
+    rng = np.random.default_rng(4)
+    load_motion("turn", rng, seconds=1.5, field="CLIP")  # as the CLI draws: the clip first
+    human = sm.build_subject(sm.sample_subject(rng, SubjectConfig.from_dict({"cloth": "simulated",
+                                                                            "outfit": ["dress"]}, "config")))
+    (g,) = simulated_garments(human)
+    part = human.parts[g.part]
+    _, welded = np.unique(weld(part.rest), return_inverse=True)
+    tri = np.sort(welded.reshape(-1)[g.faces], axis=1)
+    assert len(tri) - len(np.unique(tri, axis=0)) == 1  # the fin, in the layer as built
+    f = g.piece.faces
+    _, count = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0,
+                         return_counts=True)
+    assert count.max() == 2 and len(f) == len(g.faces) - 2
 
 
 def _skirt_subject(cloth: str = "simulated"):

@@ -1,6 +1,7 @@
 """``simulate_cloth(human, motion) -> ClothTrack``: a subject's hanging garments (``CLOTH_KINDS``)
 simulated over its clip with Newton's VBD cloth solver on the CPU (deterministic: Warp's CPU
-kernels run in order), against the posed body as a moving mesh collider and the ground.
+kernels run in order), against the posed body as a moving mesh collider (its hands a closed
+shape of their own, without friction) and the ground.
 
 Each garment's uv seams are welded (else its panels fall apart); its held vertices (a
 waistband, a bodice) are not simulated but moved to the skinned garment's place at every
@@ -144,6 +145,9 @@ class Collider:
     # particles moved out of the collider, after each frame (the solver's contacts are soft)
     lead: Callable[[float], tuple[np.ndarray, np.ndarray]] | None = None  # as ``at``, from w = 0 (where the cloth
     # is put on) to w = 1 (frame 0), over ``ClothSettings.lead_s`` at the start of the settling
+    slippery: np.ndarray | None = None  # (T,) bool: faces that push the cloth without friction (the hands:
+    # with friction a walking hand dragged a pleated skirt's side up to the waist, an edge 13 cm past its
+    # rest length, issue 34's stability clip 171); a closed mesh of its own, as the rest is (``_collider_parts``)
 
 
 @dataclass
@@ -177,13 +181,23 @@ def simulated_garments(human) -> list[_Garment]:
         faces = part.faces[:len(part.faces) - mesh.hem[0]]
         rows, index = np.unique(weld(part.rest[:main]), return_inverse=True)
         index = index.reshape(-1)
-        held = kind.held(part.rest[rows], human.regions) | slight(part.rest[rows], index[faces])
+        cloth = _without_fins(index[faces])
+        held = kind.held(part.rest[rows], human.regions) | slight(part.rest[rows], cloth)
         fabric = FABRICS[fabric_of(kind, mesh.params)]
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
-        out.append(_Garment(part.name, k, rows, index, ClothPiece(index[faces], held, fabric), faces,
-                            band, depth))
+        out.append(_Garment(part.name, k, rows, index, ClothPiece(cloth, held, fabric), faces, band, depth))
     return out
+
+
+def _without_fins(faces: np.ndarray) -> np.ndarray:
+    """``faces`` (over particles) but those that occur twice: a dress's two halves each had a
+    sliver on their seam line, back to back, which welded into a fin on the seam (the seam's
+    edges of three triangles, one of four) that Newton read as non-manifold: its bending edges
+    and the solver's colouring went wrong ("node_idx -1 is out of range", the README's turn).
+    Without the fin each seam edge joins the two halves' triangles alone."""
+    _, inverse, count = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True)
+    return faces[count[inverse.reshape(-1)] == 1]
 
 
 SLIGHT = 0.15  # a particle with under this share of the median particle's cloth is held (see ``slight``)
@@ -263,7 +277,8 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
             q = seal.apply(body, q)
         return out_of_body(human, body, q, s.particle_radius / 2)
 
-    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead)
+    hands = (np.asarray(human.regions.group) == "hand")[human.body.faces].any(axis=1)
+    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead, slippery=hands)
 
 
 def _seals(human, garments: list[_Garment]) -> list[WaistSeal]:
@@ -305,15 +320,21 @@ def drape(pieces: list[ClothPiece], collider: Collider, settings: ClothSettings 
         return _run(pieces, collider, s, names)
 
 
-def _model(pieces: list[ClothPiece], faces: np.ndarray, collider_v: np.ndarray, q: np.ndarray, s: ClothSettings):
-    """Newton's model: the ground, the collider mesh (returned to move it), each piece as cloth
-    of its fabric, its held particles inactive (moved, not simulated)."""
+def _model(pieces: list[ClothPiece], parts: list[_Part], collider_v: np.ndarray, q: np.ndarray, s: ClothSettings):
+    """Newton's model: the ground, the collider's closed ``parts`` as mesh shapes (returned, to
+    move them), each piece as cloth of its fabric, its held particles inactive (moved, not
+    simulated)."""
     import newton
     import warp as wp
     builder = newton.ModelBuilder(up_axis=newton.Axis.Y)  # gravity along -y
     builder.add_ground_plane()
-    mesh = newton.Mesh(collider_v.astype(np.float32), faces.astype(np.int32).ravel())
-    builder.add_shape_mesh(body=-1, mesh=mesh)
+    meshes = []
+    for part in parts:
+        mesh = newton.Mesh(part.place(collider_v).astype(np.float32), part.faces.astype(np.int32).ravel())
+        cfg = builder.default_shape_cfg.copy()
+        cfg.mu = part.mu
+        builder.add_shape_mesh(body=-1, mesh=mesh, cfg=cfg)
+        meshes.append((mesh, part))
     start = 0
     for p in pieces:
         f, pts = p.fabric, q[start:start + len(p.held)].astype(np.float32)
@@ -333,14 +354,69 @@ def _model(pieces: list[ClothPiece], faces: np.ndarray, collider_v: np.ndarray, 
     model.particle_flags = wp.array(flags, dtype=old.dtype)
     model.soft_contact_ke, model.soft_contact_kd = s.contact_stiffness, 1.0e-2
     model.soft_contact_mu = float(np.mean([p.fabric.friction for p in pieces]))
-    return model, mesh, held
+    return model, meshes, held
+
+
+@dataclass
+class _Part:
+    """A closed piece of the collider for Newton: its ``vertices`` (collider vertices) and a cap
+    vertex at the middle of each of its ``loops`` (where it was cut from the rest), its faces
+    over those, capped, and its friction (Newton's shape ``mu``, 1 by default: it takes the
+    geometric mean of it and the fabric's)."""
+
+    vertices: np.ndarray
+    loops: list
+    faces: np.ndarray
+    mu: float
+
+    def place(self, v: np.ndarray) -> np.ndarray:
+        """The part's vertices from the collider's ``v`` (positions or velocities)."""
+        caps = [v[loop].mean(0) for loop in self.loops]
+        return np.concatenate([v[self.vertices], caps]) if caps else v[self.vertices]
+
+
+def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int) -> list[_Part]:
+    """The collider's faces with friction and its ``slippery`` ones (``mu`` 0), each closed:
+    open where they were cut apart, Newton's mesh contacts took cloth near the cut for inside
+    and threw it off (9 of 37 stability clips raised), so each cut loop is capped by a fan
+    round a vertex at its middle."""
+    if slippery is None or not slippery.any():
+        return [_Part(np.arange(n), [], faces, 1.0)]
+    out = []
+    for pick, mu in ((~slippery, 1.0), (slippery, 0.0)):
+        if not pick.any():
+            continue
+        f = faces[pick]
+        directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+        _, first, count = np.unique(np.sort(directed, axis=1), axis=0, return_index=True, return_counts=True)
+        cut = directed[first[count == 1]]  # (a, b) as the part's own faces run round it
+        loops = _loops(cut)
+        used, local = np.unique(np.concatenate([f.ravel(), cut.ravel()]), return_inverse=True)
+        f_local = local[:f.size].reshape(-1, 3)
+        caps = [np.stack([np.searchsorted(used, b), np.searchsorted(used, a), np.full(len(a), len(used) + k)], axis=1)
+                for k, (a, b) in enumerate(cut[np.isin(cut[:, 0], loop)].T for loop in loops)]
+        out.append(_Part(used, loops, np.concatenate([f_local, *caps]), mu))
+    return out
+
+
+def _loops(edges: np.ndarray) -> list[np.ndarray]:
+    """The vertices (sorted) of each closed loop that ``edges`` (E, 2) make, the loops in the
+    order of their smallest vertex."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    used, local = np.unique(edges, return_inverse=True)
+    local = local.reshape(-1, 2)
+    graph = coo_matrix((np.ones(len(local)), (local[:, 0], local[:, 1])), shape=(len(used), len(used)))
+    _, label = connected_components(graph, directed=False)
+    return [used[label == k] for k in range(label.max() + 1)] if len(used) else []
 
 
 def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: list[str]) -> np.ndarray:
     import newton
     plan = Schedule.of(collider, s)
     (body0, q0), start = plan.first, plan.start()
-    model, mesh, held = _model(pieces, collider.faces, start[0], start[1], s)
+    parts = _collider_parts(collider.faces, collider.slippery, len(start[0]))
+    model, meshes, held = _model(pieces, parts, start[0], start[1], s)
     solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
                                       particle_self_contact_margin=s.self_contact_margin,
                                       particle_self_contact_gap=s.self_contact_margin / 2)
@@ -355,7 +431,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     for f in range(-plan.settle, collider.n_frames):
         now, moving = plan.at(f), plan.moving(f)
         if plan.lead and f == plan.lead - plan.settle:  # the arms are down: the body stands at frame 0, still
-            _move(mesh, body0, np.zeros_like(body0))
+            _move(meshes, body0, np.zeros_like(body0))
         n = _substeps(prev[0][near], now[0][near], s)
         dt = 1.0 / collider.fps / n
         if f == 1:
@@ -364,7 +440,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
         for k in range(n):
             w = (k + 1) / n
             if moving:
-                _move(mesh, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
+                _move(meshes, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
                 q = s0.particle_q.numpy()
                 q[held] = (prev[1] + w * (now[1] - prev[1]))[held]
                 s0.particle_q.assign(q)
@@ -435,10 +511,11 @@ def _substeps(before: np.ndarray, after: np.ndarray, s: ClothSettings) -> int:
     return int(np.clip(np.ceil(move / s.max_step), s.substeps, s.max_substeps))
 
 
-def _move(mesh, vertices: np.ndarray, velocities: np.ndarray) -> None:
-    mesh.mesh.points.assign(vertices.astype(np.float32))
-    mesh.mesh.velocities.assign(velocities.astype(np.float32))
-    mesh.mesh.refit()
+def _move(meshes: list, vertices: np.ndarray, velocities: np.ndarray) -> None:
+    for mesh, part in meshes:
+        mesh.mesh.points.assign(part.place(vertices).astype(np.float32))
+        mesh.mesh.velocities.assign(part.place(velocities).astype(np.float32))
+        mesh.mesh.refit()
 
 
 @dataclass
