@@ -387,8 +387,9 @@ def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress
     """The solver's pull on a particle scales with the area of its triangles: a shift's free
     particle whose triangles were slivers (1 % of the median particle's area, where the bodice
     meets the skirt) was thrown off by a running hand and never came back (issue 34's stability
-    clip 164: 1.1 m from its neighbours). Areas from trimesh; the free particles are the
-    solver's active ones."""
+    clip 164: 1.1 m from its neighbours); a shift's with 31 % of it, in two triangles just under
+    the held line, was flung 1.6 m in a squat (clip 222). Areas from trimesh; the free particles
+    are the solver's active ones."""
     import synmitsuba as sm
     from synmitsuba.cloth.simulate import simulated_garments
     recipe = sm.sample_subject(np.random.default_rng(3), {"outfit": [dress], "jacket": False, "cloth": "simulated",
@@ -400,7 +401,7 @@ def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress
     np.add.at(area, mesh.faces.ravel(), np.repeat(mesh.area_faces, 3))
     free = ~g.piece.held
     assert free.sum() > 0.4 * len(free)  # the skirt hangs free
-    assert area[free].min() >= 0.15 * np.median(area[area > 0]), np.sort(area[free])[:5] / np.median(area)
+    assert area[free].min() >= 0.35 * np.median(area[area > 0]), np.sort(area[free])[:5] / np.median(area)
 
 
 def test_a_welded_fin_on_a_dress_seam_leaves_the_cloth_mesh_manifold():
