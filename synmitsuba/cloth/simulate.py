@@ -393,8 +393,8 @@ def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int) -> l
         _, first, count = np.unique(np.sort(directed, axis=1), axis=0, return_index=True, return_counts=True)
         cut = directed[first[count == 1]]  # (a, b) as the part's own faces run round it
         loops = _loops(cut)
-        used, local = np.unique(np.concatenate([f.ravel(), cut.ravel()]), return_inverse=True)
-        f_local = local[:f.size].reshape(-1, 3)
+        used, local = np.unique(f, return_inverse=True)  # the cut's vertices are the faces' too
+        f_local = local.reshape(-1, 3)
         caps = [np.stack([np.searchsorted(used, b), np.searchsorted(used, a), np.full(len(a), len(used) + k)], axis=1)
                 for k, (a, b) in enumerate(cut[np.isin(cut[:, 0], loop)].T for loop in loops)]
         out.append(_Part(used, loops, np.concatenate([f_local, *caps]), mu))
