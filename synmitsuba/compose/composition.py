@@ -17,7 +17,7 @@ from synmitsuba.compose.environments import (environment_names, keep_out_boxes, 
                                              sample_lighting)
 from synmitsuba.compose.instances import OBJECT_INSTANCE, first_subject_instance
 from synmitsuba.compose.occlusion import score_frames, score_views
-from synmitsuba.compose.placement import PlacementConfig, place_subjects
+from synmitsuba.compose.placement import PlacementConfig, frame_hulls, place_subjects
 from synmitsuba.compose.spec import SceneSpec, ViewSpec, resolve_environment
 from synmitsuba.compose.subjects import MotionSpec, SubjectSpec, aimed, clip_bounds, performed_clip
 from synmitsuba.compose.visibility import VisibilityTarget, choose_for_target, lines_of_sight
@@ -239,6 +239,7 @@ def clip_radius(d: _Draft) -> float:
     is at least the clip's ground diameter."""
     from scipy.spatial.distance import pdist
     pts = np.concatenate(d.hulls)
+    pts = frame_hulls([pts])[0]  # the farthest pair are hull vertices: the same diameter, bit for bit
     diameter = float(pdist(pts).max()) if len(pts) > 1 else 0.0
     return float(np.hypot(diameter, d.height)) / 2
 

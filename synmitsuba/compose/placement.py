@@ -32,9 +32,27 @@ def frame_hulls(xz_per_frame) -> list[np.ndarray]:
     from scipy.spatial import ConvexHull
     out = []
     for pts in xz_per_frame:
-        pts = np.asarray(pts, np.float64)
+        pts = _outer(np.asarray(pts, np.float64))
         out.append(pts[ConvexHull(pts).vertices] if len(pts) >= 3 else pts)
     return out
+
+
+def _outer(pts: np.ndarray) -> np.ndarray:
+    """``pts`` less those strictly inside the polygon of its extreme points in eight directions
+    (Akl-Toussaint): none of them is a hull vertex, and Qhull then sorts hundreds of points, not
+    a whole posed subject's tens of thousands."""
+    if len(pts) < 16:
+        return pts
+    d = np.array([[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]], np.float64)
+    at = np.argmax(pts @ d.T, axis=0)  # counter-clockwise, as the directions turn
+    at = at[np.r_[True, at[1:] != at[:-1]]]
+    poly = pts[at[:-1] if len(at) > 1 and at[-1] == at[0] else at]
+    if len(poly) < 3:
+        return pts
+    edge = np.roll(poly, -1, 0) - poly
+    inward = np.stack([-edge[:, 1], edge[:, 0]], 1)  # left of each counter-clockwise edge
+    side = pts @ inward.T - np.einsum("ij,ij->i", inward, poly)
+    return pts[~(side > 1e-9).all(1)]  # the margin keeps every point rounding might put on an edge
 
 
 def frame_boxes(hulls: list[np.ndarray], yaw_deg: float = 0.0, offset=(0.0, 0.0)) -> np.ndarray:
