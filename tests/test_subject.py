@@ -1415,6 +1415,30 @@ def test_a_skirt_is_dressed_over_the_top_tucked_into_it():
     assert checked >= 48  # two rings of the band at least
 
 
+def test_a_straight_cut_is_vented_up_the_centre_back_and_no_other_cut_opens(human):
+    """A straight skirt's only openings besides its waist and hem run up its centre back from
+    the hem for its cut's vent (to the ring at or above it); its two edges stand apart, so a
+    weld (the cloth stage's) leaves it open. Unvented, a stride stretched a straight hem 9-15 cm."""
+    from synmitsuba.body.garments import SKIRT_CUTS, GarmentParams, _flare, open_edges
+    from synmitsuba.body.topology import weld
+    r = human.regions
+    for name, cut in SKIRT_CUTS.items():
+        v, f, _ = _flare(human.body, r, GarmentParams(kind="skirt", ease=0.01, length=0.6, cut=name), 0.006, r.waist_y)
+        ends = np.unique(open_edges(f, weld(v)))
+        top, hem = v[:, 1].max(), v[:, 1].min()
+        slit = ends[(v[ends, 1] > hem + 1e-9) & (v[ends, 1] < top - 1e-9)]
+        if not cut.vent:
+            assert not len(slit), name
+            continue
+        spacing = (top - hem) / 13
+        assert cut.vent <= np.ptp(v[slit, 1]) + spacing < cut.vent + spacing + 1e-9, name  # up to the vent's ring
+        centre = v[:, [0, 2]].mean(0)
+        assert (v[slit, 2] < centre[1]).all() and (np.abs(v[slit, 0] - centre[0]) < 0.03).all(), name  # at the back
+        edges = slit[v[slit, 1] < v[slit, 1].max() - 1e-9]  # under the point where the two edges meet
+        sides = np.sign(v[edges, 0] - v[slit[np.argmax(v[slit, 1])], 0])
+        assert (sides != 0).all() and sides.sum() == 0, name  # both edges, apart
+
+
 def test_every_skirt_cut_has_its_folds_and_flare(human):
     """Each cut's rest skirt ring by ring: round the hem, the radius's harmonic at the cut's
     fold count has the amplitude its wave gives (a zigzag's first harmonic is 8/pi^2 of its
@@ -1431,9 +1455,9 @@ def test_every_skirt_cut_has_its_folds_and_flare(human):
     for name, cut in SKIRT_CUTS.items():
         g = GarmentParams(kind="skirt", ease=0.01, length=0.6, cut=name)
         v, _, _ = _flare(human.body, r, g, 0.006, r.waist_y)
-        n = len(v) // 14 - 1  # each ring's first point comes again at the end (the uv seam's copies)
+        n = 6 * cut.folds or 48  # each ring's first point comes again after the rings (the uv seam's copies)
         rings = v[:14 * n].reshape(14, n, 3)
-        assert np.array_equal(v[14 * n:], rings[:, 0])
+        assert np.array_equal(v[14 * n:14 * n + 14], rings[:, 0]) and (len(v) == 14 * n + 14) == (cut.vent == 0)
         assert np.allclose(rings[..., 1], rings[:, :1, 1])  # level rings
         radius = [np.hypot(*(ring[:, [0, 2]] - ring[:, [0, 2]].mean(0)).T) for ring in rings]
         hem_radius[name] = radius[-1].mean()

@@ -250,6 +250,8 @@ class SkirtCut:
     ``stitched`` metres under the top and deepening over the next ``ramp`` (None: down to the
     hem); ``sharp``: pleats (a zigzag) rather than soft waves. ``fabric``: what the cloth stage
     simulates it as (a name in ``cloth.fabrics.FABRICS``; None: its garment kind's).
+    ``vent``: metres of slit up the centre back from the hem (a straight cut's: a narrow skirt
+    is walked in through its vent; closed, a stride stretched its hem 9-15 cm).
     ``share``: how often a sampled skirt has this cut."""
 
     flare: float
@@ -261,6 +263,7 @@ class SkirtCut:
     ramp: float | None = None
     sharp: bool = False
     fabric: str | None = None
+    vent: float = 0.0
     share: float = 0.0
 
 
@@ -270,7 +273,7 @@ SKIRT_CUTS: dict[str, SkirtCut] = {
     "pleated": SkirtCut(0.05, folds=12, depth=0.035, stitched=0.1, ramp=0.05, sharp=True,
                         fabric="suiting", share=0.25),  # pressed: holds its creases
     "circle": SkirtCut(0.1, 1.0, 1.0, folds=10, depth=0.1, stitched=0.04, share=0.2),
-    "straight": SkirtCut(0.02, 0.2, 2.0, share=0.15),
+    "straight": SkirtCut(0.02, 0.2, 2.0, vent=0.18, share=0.15),
 }
 
 
@@ -595,8 +598,37 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, 
     v_of = np.linspace(1, 0, len(heights))
     uv = np.column_stack([np.tile(ang / (2 * np.pi), len(heights)), np.repeat(v_of, n_seg)])
     # the seam's own copies: a face closing the ring ran its uv back across the whole square
-    return (np.concatenate([verts, verts[::n_seg]]), np.array(faces),
-            np.concatenate([uv, np.column_stack([np.ones(len(heights)), v_of])]))
+    verts, faces, uv = (np.concatenate([verts, verts[::n_seg]]), np.array(faces),
+                        np.concatenate([uv, np.column_stack([np.ones(len(heights)), v_of])]))
+    return _vented(verts, faces, uv, heights, n_seg, cut.vent) if cut.vent > 0 else (verts, faces, uv)
+
+
+VENT_GAP = 0.001  # metres each edge of a vent stands off the centre-back line: apart, so no weld closes it
+
+
+def _vented(verts: np.ndarray, faces: np.ndarray, uv: np.ndarray, heights: np.ndarray, n_seg: int, vent: float):
+    """A ``_flare`` surface slit up the centre back (angle pi: point n_seg / 2 of each ring) from
+    the hem over the rings within ``vent`` metres of it: the faces right of the line take a
+    copy of its points, each side stood ``VENT_GAP`` off the line, so the slit is an opening
+    (``hem`` turns a band along both its edges, and the cloth stage does not weld it shut)."""
+    back = n_seg // 2
+    rings = np.flatnonzero(heights < heights[-1] + vent - 1e-9)
+    rings = rings[rings > 0]
+    if not len(rings) or n_seg % 2:
+        return verts, faces, uv
+    old = rings * n_seg + back
+    new = len(verts) + np.arange(len(rings))
+    tangent = np.array([-1.0, 0.0, 0.0])  # d(sin a, 0, cos a)/da at a = pi: round the ring, to the copies' side
+    verts = verts.copy()
+    verts[old] -= VENT_GAP * tangent
+    verts = np.concatenate([verts, verts[old] + 2 * VENT_GAP * tangent])
+    right = np.concatenate([2 * (k * n_seg + back) + np.arange(2) for k in range(len(heights) - 1)])
+    swap = np.full(len(verts), -1)
+    swap[old] = new
+    sub = faces[right]
+    faces = faces.copy()
+    faces[right] = np.where(swap[sub] >= 0, swap[sub], sub)
+    return verts, faces, np.concatenate([uv, uv[old]])
 
 
 def _shoes(body, r: BodyRegions, g: GarmentParams, offset: float):
