@@ -589,16 +589,16 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, 
         rings.append(np.column_stack([centre[0] + out * d[:, 0], np.full(n_seg, h), centre[1] + out * d[:, 1]]))
     verts = np.concatenate(rings)
     seam = len(verts) + np.arange(len(heights))  # each ring's first point again, at u = 1, last
-    faces = []
+    quads = []
     for k in range(len(heights) - 1):
         for j in range(n_seg):
             a, b = k * n_seg + j, (k * n_seg + j + 1 if j + 1 < n_seg else seam[k])
             c, e = a + n_seg, (b + n_seg if j + 1 < n_seg else seam[k + 1])
-            faces += [[a, c, b], [b, c, e]]
+            quads += [[a, c, b], [b, c, e]]
     v_of = np.linspace(1, 0, len(heights))
     uv = np.column_stack([np.tile(ang / (2 * np.pi), len(heights)), np.repeat(v_of, n_seg)])
     # the seam's own copies: a face closing the ring ran its uv back across the whole square
-    verts, faces, uv = (np.concatenate([verts, verts[::n_seg]]), np.array(faces),
+    verts, faces, uv = (np.concatenate([verts, verts[::n_seg]]), np.array(quads),
                         np.concatenate([uv, np.column_stack([np.ones(len(heights)), v_of])]))
     return _vented(verts, faces, uv, heights, n_seg, cut.vent) if cut.vent > 0 else (verts, faces, uv)
 
