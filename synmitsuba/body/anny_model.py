@@ -194,7 +194,10 @@ def shaped_batch(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
 def statures(rows: list[dict]) -> np.ndarray:
     """Standing height (m, soles to crown, rest pose) of the anny body for each complete set of
     phenotypes in ``rows``."""
-    verts = shaped_batch(rows)[0]
+    return _stature(shaped_batch(rows)[0])
+
+
+def _stature(verts: np.ndarray) -> np.ndarray:
     return verts[..., 1].max(1) - verts[..., 1].min(1)
 
 
@@ -210,7 +213,7 @@ def measures(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     bxc = np.stack([b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1], b[..., 2] * c[..., 0] - b[..., 0] * c[..., 2],
                     b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]], -1)
     volume = np.abs(np.einsum("bfi,bfi->b", a, bxc)) / 6
-    return verts[..., 1].max(1) - verts[..., 1].min(1), volume * DENSITY_KG_M3
+    return _stature(verts), volume * DENSITY_KG_M3
 
 
 @functools.lru_cache(maxsize=1)
