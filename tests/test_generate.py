@@ -17,7 +17,7 @@ from conftest import TINY, generate_tiny as _generate
 
 def _files(root) -> dict:
     """Every file's bytes by relative path, but the run log (timings and host names) and what
-    `synmitsuba stats` adds to the shared tiny dataset in another test."""
+    `synmitsuba stats` adds to a dataset."""
     out = {}
     for folder, _, files in os.walk(root):
         for f in files:
@@ -201,7 +201,9 @@ def test_empty_or_missing_folders_are_errors_not_empty_datasets(sm, tmp_path):
             make(tmp_path / "missing")
 
 
-def test_stats_count_what_the_manifest_lists(tiny):
+def test_stats_count_what_the_manifest_lists(tiny, tmp_path):
+    import shutil
+    tiny = shutil.copytree(tiny, tmp_path / "tiny")  # stats writes into the dataset; the shared one stays as made
     run = subprocess.run([sys.executable, "-m", "synmitsuba", "stats", str(tiny)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     stats = json.loads((tiny / "stats.json").read_text())
