@@ -61,6 +61,25 @@ def test_ground_maps_are_deterministic_in_the_seed():
         assert 0 <= a.a.texture.min() and a.a.texture.max() <= 1 and 0 <= a.a.roughness_map.min() <= 1
 
 
+def test_a_ground_drawn_again_is_the_one_drawn_before_and_moves_the_rng_alike():
+    """Composition builds its environment on every try: the second draw from the same rng state
+    is the first's material, and leaves the rng where drawing it anew (uncached) leaves it; the
+    kept materials stay within ``MADE_BYTES``."""
+    for kind in ("paving", "grass"):
+        draws = []
+        for made in (grounds.ground_material, grounds.ground_material, grounds._ground_material):
+            rng = np.random.default_rng(11)
+            draws.append((made(kind, [0.4, 0.3, 0.2], rng, None, 128, 1.0), rng.integers(2 ** 62)))
+        (first, after), (again, after_again), (fresh, after_fresh) = draws
+        assert again[0] is first[0] and after == after_again == after_fresh
+        assert np.array_equal(first[0].a.texture, fresh[0].a.texture) and np.array_equal(first[0].weight, fresh[0].weight)
+        other, _ = grounds.ground_material(kind, [0.4, 0.3, 0.2], np.random.default_rng(12), None, 128, 1.0)
+        assert other is not first[0]
+    for seed in range(4):  # 1024-px grounds, 44 MB each
+        grounds.ground_material("asphalt", [0.3, 0.3, 0.3], np.random.default_rng(seed))
+    assert sum(e[2] for e in grounds._MADE.values()) <= grounds.MADE_BYTES
+
+
 def test_normal_map_follows_the_height_field():
     """A sine ridge h = A sin(2 pi k u / n): the encoded normal is (-h'(u), 0, 1) normalised."""
     n, period, amp, k = 128, 2.0, 0.01, 4

@@ -10,6 +10,7 @@ the first's size. No shift of the ground shows the same pattern twice over 30 m.
 """
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Callable
 
@@ -238,7 +239,34 @@ def ground_material(kind: str, base_rgb, rng: np.random.Generator, period_m: flo
                     n: int = TILE_PX, roughness_scale: float = 1.0):
     """A ``Blend`` of two tiles of ``kind`` (same layout, own tones) under a ``MACRO_M`` mask,
     with the first tile's normal map; ``period_m``: metres one tile covers (the kind's default
-    when None). Returns (material, period_m)."""
+    when None). Returns (material, period_m), the same objects for the same arguments and
+    ``rng`` state (``_MADE``), with ``rng`` moved on as drawing them moves it: a composition
+    builds its environment again on every try (placement, cameras) and a worker the objects'
+    looks for every sequence, 0.1-1 s each. Treat the material as read-only."""
+    key = (kind, tuple(np.asarray(base_rgb, dtype=float).ravel().tolist()), repr(rng.bit_generator.state),
+           period_m, n, roughness_scale)
+    if key not in _MADE:
+        made = _ground_material(kind, base_rgb, rng, period_m, n, roughness_scale)
+        _MADE[key] = (made, rng.bit_generator.state, _nbytes(made[0]))
+        while len(_MADE) > 1 and sum(e[2] for e in _MADE.values()) > MADE_BYTES:
+            _MADE.popitem(last=False)
+    _MADE.move_to_end(key)
+    made, after, _ = _MADE[key]
+    rng.bit_generator.state = after
+    return made
+
+
+_MADE: OrderedDict = OrderedDict()  # (arguments, rng state) -> ((material, period), rng state after, bytes)
+MADE_BYTES = 96 * 2 ** 20  # the most recent within this: a 1024-px ground's maps are 44 MB, an object's 256-px
+# look's 3 MB (city_street: a ground and 7 looks); a new sequence's ground pushes out the one before last
+
+
+def _nbytes(blend) -> int:
+    return sum(a.nbytes for m in (blend, blend.a, blend.b) for a in vars(m).values() if isinstance(a, np.ndarray))
+
+
+def _ground_material(kind: str, base_rgb, rng: np.random.Generator, period_m: float | None, n: int,
+                     roughness_scale: float):
     from synmitsuba.scene.materials import Blend, Material
     entry = GROUND_MATERIALS[kind]
     period = float(period_m or entry.period_m)
