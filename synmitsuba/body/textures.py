@@ -450,8 +450,10 @@ def paint_uv(image: np.ndarray, uv: np.ndarray, face_uv: np.ndarray, weight: np.
     draw = ImageDraw.Draw(mask)
     painted = np.flatnonzero(weight.max(1) > 0)
     px = np.stack([uv[:, 0] * size, (1.0 - uv[:, 1]) * size], 1)
-    for f in painted:
-        draw.polygon([tuple(px[i]) for i in face_uv[f]], fill=int(round(255 * weight[f].mean())))
+    corners = px[face_uv[painted]].reshape(-1, 6).tolist()  # x, y of each corner, as PIL takes them
+    fills = np.round(255 * weight[painted].mean(1)).astype(int).tolist()  # each row's mean, as its own mean()
+    for xy, fill in zip(corners, fills):
+        draw.polygon(xy, fill=fill)
     if blur > 0:
         mask = mask.filter(ImageFilter.GaussianBlur(blur))
     m = np.asarray(mask, np.float32)[..., None] / 255.0
