@@ -94,6 +94,7 @@ def test_a_setting_added_since_counts_only_away_from_its_default():
     assert config_changes(old, new) == [f"render.spp: {spp!r} -> {spp + 1!r}", "smplx.hand_pca: None -> 12"]
 
 
+@pytest.mark.slow  # 42-52 s; make test keeps the stand-in pool's dying worker and the partial rerun below
 def test_a_killed_worker_loses_and_duplicates_nothing(tmp_path):
     out = tmp_path / "kill"
     proc = subprocess.Popen([sys.executable, "-m", "synmitsuba", "generate", TINY, "--out", str(out), "--quiet",
@@ -226,6 +227,7 @@ def test_stats_count_what_the_manifest_lists(tiny, tmp_path):
     assert run.returncode == 2 and "no such folder" in run.stderr
 
 
+@pytest.mark.slow  # 52-54 s, most of it Ray's start; make test keeps two local workers against one
 def test_ray_writes_the_same_files_as_the_local_pool(tiny, tmp_path):
     run = _generate(tmp_path / "ray", "--executor", "ray", "--workers", "2")
     assert run.returncode == 0, run.stderr
