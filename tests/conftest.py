@@ -44,13 +44,13 @@ def generate_tiny(out, *extra):
 
 
 @pytest.fixture(scope="session")
-def tiny(tmp_path_factory, worker_id):
+def tiny(tmp_path_factory, request):
     """The tiny dataset (2 sequences, 2 frames each, one worker), shared by the tests that only
     read it: made once per run, by the first test worker that needs it, while the others wait
     for it (a file lock in the run's base folder; each worker made its own before, 40-60 s)."""
     from filelock import FileLock
     root = tmp_path_factory.getbasetemp()
-    root = root if worker_id == "master" else root.parent
+    root = root.parent if hasattr(request.config, "workerinput") else root  # an xdist worker's is under the run's
     out, done = root / "tiny", root / "tiny.done"
     with FileLock(str(root / "tiny.lock")):
         if not done.exists():
