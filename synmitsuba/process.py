@@ -28,6 +28,7 @@ class ProcessSettings:
     collect_before_load: bool = False
     freeze_after_model_load: bool = False
     torch_threads: int | None = None
+    forward_only_kernels: bool = False
 
 
 SETTINGS = ProcessSettings()
@@ -60,4 +61,13 @@ def configure_process(torch_threads: int | None = 2) -> ProcessSettings:
     SETTINGS.collect_before_load = True
     SETTINGS.freeze_after_model_load = True
     SETTINGS.torch_threads = torch_threads
+    SETTINGS.forward_only_kernels = True
     return SETTINGS
+
+
+def apply_warp_settings() -> None:
+    """The process's Warp opt-ins (``forward_only_kernels``), applied by the stage about to
+    make Warp modules; nothing unless the process opted in."""
+    if SETTINGS.forward_only_kernels:
+        import warp
+        warp.config.enable_backward = False

@@ -1,6 +1,7 @@
 """Shared test setup: kernel caches in the repository (reused across runs; anny's 790 MB model
 stays in the user's cache, ``ANNY_CACHE_DIR`` or ``~/.cache/anny``, shared with ``make demo`` and
-every checkout, as README says), idle OpenMP threads that sleep, the default variant."""
+every checkout, as README says), idle OpenMP threads that sleep, the default variant, Warp's
+kernels forward-only as the CLI has them."""
 import os
 import pathlib
 
@@ -13,6 +14,12 @@ os.environ.setdefault("DRJIT_CACHE_DIR", str(ROOT / ".cache" / "drjit"))
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import pytest  # noqa: E402
+
+from synmitsuba.process import SETTINGS  # noqa: E402
+
+# the cloth stage's Warp kernels compiled forward-only, as the CLI and generation workers have them
+# (process.configure_process): the cloth is the same to the bit, compiled in 52 s instead of 127 s
+SETTINGS.forward_only_kernels = True
 
 
 def colour_science():

@@ -77,6 +77,22 @@ def test_a_square_cloth_falls_freely_then_settles_on_a_sphere_without_entering_i
     assert edges.max() < 1.05 * 0.8 / (N - 1)                          # the cloth barely stretches
 
 
+def test_newtons_kernels_compile_forward_only_where_the_process_opted_in(sphere_drape, monkeypatch):
+    """conftest opts in as the CLI does (process.configure_process): the drape made Newton's
+    modules without their backward pass; a process that did not opt in keeps Warp's default."""
+    import warp as wp
+
+    from synmitsuba.process import SETTINGS, apply_warp_settings
+    assert wp.get_module("newton._src.geometry.kernels").options["enable_backward"] is False
+    monkeypatch.setattr(wp.config, "enable_backward", True)
+    monkeypatch.setattr(SETTINGS, "forward_only_kernels", False)
+    apply_warp_settings()
+    assert wp.config.enable_backward is True
+    monkeypatch.setattr(SETTINGS, "forward_only_kernels", True)
+    apply_warp_settings()
+    assert wp.config.enable_backward is False
+
+
 def test_keep_outside_sets_points_in_or_near_a_sphere_its_margin_out_and_leaves_the_rest():
     """Against the icosphere's exact triangles (reference.py): every point inside or under the
     margin ends the margin from the surface and outside it (winding number); the others are

@@ -316,6 +316,9 @@ def drape(pieces: list[ClothPiece], collider: Collider, settings: ClothSettings 
     each frame in ``substeps``, the collider and the held particles moved linearly between
     frames. ``names`` name the pieces in a ``ClothError``."""
     import warp as wp
+
+    from synmitsuba.process import apply_warp_settings
+    apply_warp_settings()  # before Newton is first imported: its kernels are made then
     s = settings or ClothSettings()
     names = names or [f"piece {k}" for k in range(len(pieces))]
     with wp.ScopedDevice(s.device):
