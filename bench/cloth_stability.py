@@ -15,8 +15,9 @@ the stage raises ``ClothError`` past ``ClothSettings.max_drift``, 1 m), the larg
 a simulated vertex from the body's nearest vertex (a hem that swings far from where the skinned
 one is but stays by the legs is cloth; one that flies off is not; rows logged before this was measured lack it), the largest stretch
 of a simulated cloth edge (a free particle at one end or both) past its rest length (the
-cloth as put on; a torn or spiked piece shows here first: rows logged before this was
-measured lack it), the seconds, and the code's git revision
+garment as cut, the solver's rest shape; rows from revisions before that measured it from the
+cloth as put on, the solver's rest shape then: see bench/RESULTS.md; a torn or spiked piece
+shows here first: rows logged before this was measured lack it), the seconds, and the code's git revision
 (``rev``: rows logged before it was recorded lack it).
 Prints a JSON summary of the whole log (clips over half a metre in either: worth a look).
 
@@ -89,17 +90,12 @@ def run_clip(k: int, seconds: float) -> dict:
 
 def max_stretch(human, clip, track) -> float:
     """Metres the most stretched edge of any simulated garment with a free particle at an end
-    (held ones follow the skinned garment) is longer than at rest (where the cloth stage puts
-    the cloth on, which sets the solver's rest lengths), over every frame."""
-    import synmitsuba as sm
-    from synmitsuba.cloth.lead import Schedule
-    from synmitsuba.cloth.simulate import cloth_inputs
-    s = sm.ClothSettings()
-    garments, collider = cloth_inputs(human, clip, s)
-    rest, start, out = Schedule.of(collider, s).start()[1], 0, 0.0
-    for g in garments:
-        r = rest[start:start + len(g.rows)]
-        start += len(g.rows)
+    (held ones follow the skinned garment) is longer than at rest (the solver's rest shape:
+    the garment as cut, ``ClothPiece.rest``), over every frame."""
+    from synmitsuba.cloth.simulate import simulated_garments
+    out = 0.0
+    for g in simulated_garments(human):
+        r = g.piece.rest
         f = g.piece.faces
         e = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)
         e = e[~g.piece.held[e].all(axis=1)]

@@ -360,6 +360,55 @@ def test_a_torn_cloth_is_an_error_at_the_frame_an_edge_passes_max_stretch():
         _dragged_corner(max_stretch=0.2)
 
 
+def test_a_carried_particle_goes_where_a_rigid_motion_of_the_cloth_round_it_takes_it():
+    """Two corners of a square grid carried (one and two triangles: a vent's hem corners), the
+    rest turned and shifted as one: each carried corner lands on the same turn and shift of its
+    start (scipy's rotation, applied here), and nothing else moves."""
+    from scipy.spatial.transform import Rotation
+
+    from synmitsuba.cloth.simulate import _Carry
+    q0, faces = _square(9)
+    carried = np.zeros(len(q0), bool)
+    carried[[0, 8 * 9]] = True
+    assert sorted(np.bincount(faces.ravel(), minlength=len(q0))[carried]) == [1, 2]
+    carry = _Carry.of([ClothPiece(faces, np.zeros(len(q0), bool), FABRICS["woven"], carried)], q0)
+    turn, shift = Rotation.from_rotvec([0.3, -1.1, 0.7]), np.array([0.2, -0.5, 1.3])
+    moved = turn.apply(q0) + shift
+    q = moved.copy()
+    q[carried] = 0.0
+    out = carry.place(q)
+    assert out is q and np.abs(q - moved).max() < 1e-12
+
+
+def test_a_carried_corner_swings_with_its_cloth_where_a_held_one_stays_behind():
+    """The hanging square's top row carried sideways at 1.5 m/s: its bottom corner, carried,
+    keeps its edges to within 1 cm of rest while the cloth swings; held, it stayed where it
+    hung and its edges stretched (a vent's corner held at the skinned hem: clip 256's spike)."""
+    q0, faces, held = _hanging_square()
+    corner = int(np.argmin(q0[:, 0] + q0[:, 1]))
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.05)
+
+    def at(f: int):
+        q = q0.copy()
+        q[held, 0] += 0.05 * max(f, 0)
+        return ball.vertices + [3.0, 0.5, 0.0], q
+    collider = Collider(np.asarray(ball.faces), at, 30.0, 8)
+    pair = np.unique(faces[(faces == corner).any(axis=1)])
+    pair = pair[pair != corner]
+    rest = np.linalg.norm(q0[pair] - q0[corner], axis=1)
+    stretch = {}
+    for how in ("carried", "held"):
+        mark = np.zeros(len(q0), bool)
+        mark[corner] = True
+        piece = (ClothPiece(faces, held, FABRICS["woven"], mark) if how == "carried"
+                 else ClothPiece(faces, held | mark, FABRICS["woven"]))
+        q = drape([piece], collider, ClothSettings(settle_s=0.2, max_stretch=10.0), names=["square"])
+        stretch[how] = np.abs(np.linalg.norm(q[:, pair] - q[:, corner, None], axis=2) - rest).max()
+        if how == "carried":
+            assert q[-1, corner, 0] - q0[corner, 0] > 0.1  # it went with the cloth
+    assert stretch["carried"] < 0.01 < 0.05 < stretch["held"], stretch  # 4 mm, 10 cm
+
+
 def _ball_over_a_sheet(slippery: bool) -> np.ndarray:
     """x moved, per particle, of a sheet lying on the ground while a ball pressed 12 mm into it
     (onto the ground under it) slides 18 cm along it in 9 frames: a hand pressing a skirt
@@ -405,7 +454,7 @@ def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress
     meets the skirt) was thrown off by a running hand and never came back (issue 34's stability
     clip 164: 1.1 m from its neighbours); a shift's with 31 % of it, in two triangles just under
     the held line, was flung 1.6 m in a squat (clip 222). Areas from trimesh; the free particles
-    are the solver's active ones."""
+    are the solver's active ones (neither held nor carried)."""
     import synmitsuba as sm
     from synmitsuba.cloth.simulate import simulated_garments
     recipe = sm.sample_subject(np.random.default_rng(3), {"outfit": [dress], "jacket": False, "cloth": "simulated",
@@ -415,7 +464,7 @@ def test_every_free_particle_of_a_dress_has_cloth_enough_to_be_pulled_back(dress
     mesh = trimesh.Trimesh(human.parts[g.part].rest[g.rows], g.piece.faces, process=False)
     area = np.zeros(len(mesh.vertices))
     np.add.at(area, mesh.faces.ravel(), np.repeat(mesh.area_faces, 3))
-    free = ~g.piece.held
+    free = ~g.piece.held & ~g.piece.carried
     assert free.sum() > 0.4 * len(free)  # the skirt hangs free
     assert area[free].min() >= 0.35 * np.median(area[area > 0]), np.sort(area[free])[:5] / np.median(area)
 
@@ -542,9 +591,11 @@ def _pleat_depth(ring: np.ndarray, pattern: np.ndarray, half: int) -> float:
 def test_a_simulated_pleated_skirt_keeps_its_pleats_through_a_walk(skirt_walk):
     """The walk's skirt is pleated (its cut drawn for seed 5), simulated as pressed suiting: its
     rest mesh starts with the flare's 14 level rings, six vertices a pleat. Half-way down, the
-    pleats keep at least 45 % of their rest depth at every frame, after 0.5 s of settling and
+    pleats keep at least 60 % of their rest depth at every frame, after 0.5 s of settling and
     through the walk (the bending rest angles hold the creases; gravity does not iron them
-    out); at the hem, where the stride opens them, at least 20 % in the median frame."""
+    out); lower, where the stride opens them (the cloth's rest shape is the skirt as cut, so a
+    stride's width comes from the pleats, as in a real one), 40 % three rings further down and
+    at least 20 % at the hem in the median frame."""
     from synmitsuba.body.garments import SKIRT_CUTS
     human, clip, track = skirt_walk
     assert next(g.cut for g in human.recipe.garments if g.kind == "skirt") == "pleated"
@@ -555,7 +606,7 @@ def test_a_simulated_pleated_skirt_keeps_its_pleats_through_a_walk(skirt_walk):
     phase = np.arange(n) / 6 % 1.0
     pattern = 1 - 4 * np.abs(phase - 0.5)  # the zigzag, written here from the cut's description
     walk = track.frames["skirt"][:, :14 * n].reshape(-1, 14, n, 3)
-    for ring, least in ((6, 0.45), (9, 0.45), (13, None)):
+    for ring, least in ((6, 0.6), (9, 0.4), (13, None)):
         at_rest = _pleat_depth(rest[ring], pattern, 3)
         assert at_rest > 0.5 * SKIRT_CUTS["pleated"].depth, ring
         kept = np.array([_pleat_depth(q[ring], pattern, 3) for q in walk]) / at_rest

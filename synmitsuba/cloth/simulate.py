@@ -124,11 +124,17 @@ class ClothTrack:
 @dataclass
 class ClothPiece:
     """One piece of cloth as particles: its triangles, the particles held (moved, not
-    simulated) and its fabric."""
+    simulated) and its fabric. ``carried`` (None: none): particles the solver does not move
+    either, set each step where the cloth round them puts them (``_Carry``). ``rest``: the
+    cloth's rest shape, as cut (None: as it is put on). A garment's is its rest-pose mesh: put
+    on at a clip's first pose, skinned and pushed out of the legs, a stride had stretched its
+    edges 4-15 cm (a vertex pushed out alone: a spike), and cloth keeps its rest shape's spikes."""
 
     faces: np.ndarray  # (T, 3) particle indices
     held: np.ndarray   # (P,) bool
     fabric: Fabric
+    carried: np.ndarray | None = None  # (P,) bool
+    rest: np.ndarray | None = None     # (P, 3)
 
 
 @dataclass
@@ -182,11 +188,13 @@ def simulated_garments(human) -> list[_Garment]:
         rows, index = np.unique(weld(part.rest[:main]), return_inverse=True)
         index = index.reshape(-1)
         cloth = _without_fins(index[faces])
-        held = kind.held(part.rest[rows], human.regions) | slight(part.rest[rows], cloth)
+        held = kind.held(part.rest[rows], human.regions)
+        carried = slight(part.rest[rows], cloth) & ~held
         fabric = FABRICS[fabric_of(kind, mesh.params)]
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
-        out.append(_Garment(part.name, k, rows, index, ClothPiece(cloth, held, fabric), faces, band, depth))
+        piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows])
+        out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth))
     return out
 
 
@@ -209,8 +217,10 @@ def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
     its skirt, just under the held line, left a shift's vertex with 1 % of it, which a running
     hand threw off and the cloth never pulled back (1.1 m from its neighbours: issue 34's
     stability clip 164); one with 31 %, in two triangles, was flung 1.6 m in a squat (clip 222).
-    All such particles lie within 2.5 cm under the held line (over 10 dress clips: 4-22 a
-    garment). Held, such a particle follows its garment as skinned."""
+    Most lie within 2.5 cm under the held line (over 10 dress clips: 4-22 a garment); the corners
+    of a vent's hem (one and two triangles) are the others. Carried (``_Carry``), such a particle
+    goes where the cloth round it goes: held to the skinned garment, a vent's corner stayed at
+    the skinned hem while the cloth's hem rode up over a jogging knee, a 12 cm spike (clip 256)."""
     area = np.zeros(len(q))
     np.add.at(area, faces.ravel(), np.repeat(triangle_areas(q[faces]), 3))
     return area < SLIGHT * np.median(area[area > 0])
@@ -342,7 +352,7 @@ def _model(pieces: list[ClothPiece], parts: list[_Part], collider_v: np.ndarray,
         meshes.append((mesh, part))
     start = 0
     for p in pieces:
-        f, pts = p.fabric, q[start:start + len(p.held)].astype(np.float32)
+        f, pts = p.fabric, _rest_shape(p, q[start:start + len(p.held)]).astype(np.float32)
         builder.add_cloth_mesh(pos=wp.vec3(0, 0, 0), rot=wp.quat_identity(), scale=1.0,  # type: ignore[arg-type]
                                vel=wp.vec3(0, 0, 0), vertices=[wp.vec3(*v) for v in pts],
                                indices=p.faces.astype(np.int32).ravel().tolist(), density=f.density, tri_ke=f.stretch,
@@ -351,11 +361,13 @@ def _model(pieces: list[ClothPiece], parts: list[_Part], collider_v: np.ndarray,
         start += len(p.held)
     builder.color(include_bending=True)
     model = builder.finalize()
+    assert model.particle_q is not None  # a model with particles has their positions
+    model.particle_q.assign(q.astype(np.float32))  # put on where the held ones are (the rest shape's only the cloth's)
     held = np.concatenate([p.held for p in pieces])
     old = model.particle_flags
     assert old is not None  # a model with particles has their flags
     flags = old.numpy()
-    flags[held] &= ~newton.ParticleFlags.ACTIVE
+    flags[held | _carried(pieces)] &= ~newton.ParticleFlags.ACTIVE
     model.particle_flags = wp.array(flags, dtype=old.dtype)
     model.soft_contact_ke, model.soft_contact_kd = s.contact_stiffness, 1.0e-2
     model.soft_contact_mu = float(np.mean([p.fabric.friction for p in pieces]))
@@ -431,7 +443,9 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     contacts = pipeline.contacts()
     out = np.empty((collider.n_frames, len(q0), 3))
     faces, weight = _all_faces(pieces)
-    edges = [_Edges.of(p.faces + k, held, start[1]) for p, k in zip(pieces, np.cumsum([0] + [len(p.held) for p in pieces]))]
+    rest = _rest_shapes(pieces, start[1])
+    edges = [_Edges.of(p.faces + k, held, rest) for p, k in zip(pieces, np.cumsum([0] + [len(p.held) for p in pieces]))]
+    carry = _Carry.of(pieces, rest)
     prev, near = start, _near(body0, q0)
     for f in range(-plan.settle, collider.n_frames):
         now, moving = plan.at(f), plan.moving(f)
@@ -446,9 +460,11 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
             w = (k + 1) / n
             if moving:
                 _move(meshes, prev[0] + w * (now[0] - prev[0]), (now[0] - prev[0]) * collider.fps)
+            if moving or len(carry.index):
                 q = s0.particle_q.numpy()
-                q[held] = (prev[1] + w * (now[1] - prev[1]))[held]
-                s0.particle_q.assign(q)
+                if moving:
+                    q[held] = (prev[1] + w * (now[1] - prev[1]))[held]
+                s0.particle_q.assign(carry.place(q))
             pipeline.collide(s0, contacts)
             s0.clear_forces()
             if s.air is not None:
@@ -459,7 +475,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
         if collider.project is not None:
             q = collider.project(now[0], q.astype(np.float64))
             q[held] = now[1][held]
-            s0.particle_q.assign(q.astype(np.float32))
+            s0.particle_q.assign(carry.place(q).astype(np.float32))
         if f >= 0:
             out[f] = s0.particle_q.numpy()
             _check(out[f], now[1], pieces, edges, names, f, s)
@@ -523,11 +539,70 @@ def _move(meshes: list, vertices: np.ndarray, velocities: np.ndarray) -> None:
         mesh.mesh.refit()
 
 
+def _rest_shape(p: ClothPiece, put_on: np.ndarray) -> np.ndarray:
+    return put_on if p.rest is None else np.asarray(p.rest)
+
+
+def _rest_shapes(pieces: list[ClothPiece], put_on: np.ndarray) -> np.ndarray:
+    """(P, 3) every piece's rest shape (``ClothPiece.rest``), the pieces' particles concatenated."""
+    starts = np.cumsum([0] + [len(p.held) for p in pieces])
+    return np.concatenate([_rest_shape(p, put_on[a:b]) for p, a, b in zip(pieces, starts[:-1], starts[1:])])
+
+
+def _carried(pieces: list[ClothPiece]) -> np.ndarray:
+    return np.concatenate([np.zeros(len(p.held), bool) if p.carried is None else p.carried for p in pieces])
+
+
+@dataclass
+class _Carry:
+    """The carried particles (``ClothPiece.carried``) and, for each, the particles within two
+    edges of it that are not carried (``ring``; ``owner``: whose ring each is). Each step a
+    carried particle goes where a rigid fit of its ring's start positions (``start``) to their
+    present ones takes it: with the cloth round it, never flung, never left behind."""
+
+    index: np.ndarray
+    owner: np.ndarray
+    ring: np.ndarray
+    start: np.ndarray
+
+    @classmethod
+    def of(cls, pieces: list[ClothPiece], q: np.ndarray) -> _Carry:
+        from scipy.sparse import coo_matrix
+        carried, faces = _carried(pieces), _all_faces(pieces)[0]
+        pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+        near = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(q), len(q)))
+        near = ((near + near.T) + (near + near.T) @ (near + near.T)).tocsr()  # within two edges
+        index = np.flatnonzero(carried)
+        rows = [np.setdiff1d(near[i].indices, np.flatnonzero(carried)) for i in index]
+        owner = np.repeat(np.arange(len(index)), [len(r) for r in rows])
+        return cls(index, owner, np.concatenate(rows + [np.zeros(0, int)]).astype(int), np.asarray(q, np.float64))
+
+    def place(self, q: np.ndarray) -> np.ndarray:
+        """``q`` with the carried particles set, in place (returned). Sums by ``np.add.at`` and
+        einsum: the same bits whatever the thread count."""
+        if not len(self.index):
+            return q
+        n = np.bincount(self.owner, minlength=len(self.index))[:, None]
+        a, b = self.start[self.ring], np.asarray(q[self.ring], np.float64)
+        ca, cb = np.zeros((len(self.index), 3)), np.zeros((len(self.index), 3))
+        np.add.at(ca, self.owner, a)
+        np.add.at(cb, self.owner, b)
+        ca, cb = ca / n, cb / n
+        h = np.zeros((len(self.index), 3, 3))
+        np.add.at(h, self.owner, np.einsum("ni,nj->nij", a - ca[self.owner], b - cb[self.owner]))
+        u, _, vt = np.linalg.svd(h)
+        flip = np.ones((len(self.index), 3))
+        flip[:, 2] = np.sign(np.linalg.det(u) * np.linalg.det(vt))
+        rot = np.einsum("cij,cj,cjk->cki", u, flip, vt)  # (u diag(flip) vt).T: b ~ rot a
+        q[self.index] = np.einsum("cij,cj->ci", rot, self.start[self.index] - ca) + cb
+        return q
+
+
 @dataclass
 class _Edges:
     """A piece's edges that the solver moves (a free particle at one end or both: held ones
     follow the skinned garment, stretched as skinning stretches it, 19 cm at a sleeve with the
-    arms up) and their rest lengths (where the cloth is put on: the solver's rest shape)."""
+    arms up) and their rest lengths (the solver's rest shape: ``ClothPiece.rest``)."""
 
     pairs: np.ndarray
     rest: np.ndarray
