@@ -3,6 +3,7 @@ the sphere's surface; a simulated skirt over a walk against the body (winding nu
 tests/reference.py); determinism across processes; the placed subject's scene and labels
 carrying the simulated cloth, and the skinned path as before."""
 import json
+import re
 import subprocess
 import sys
 
@@ -91,6 +92,41 @@ def test_newtons_kernels_compile_forward_only_where_the_process_opted_in(sphere_
     monkeypatch.setattr(SETTINGS, "forward_only_kernels", True)
     apply_warp_settings()
     assert wp.config.enable_backward is False
+
+
+WARM_CHILD = """
+import sys
+sys.path.insert(0, {tests!r})
+from synmitsuba.process import SETTINGS
+SETTINGS.forward_only_kernels = True
+from synmitsuba.cloth.warm import compile_kernels
+compile_kernels()
+print("--- warmed ---", flush=True)
+from test_cloth import _sphere_drape
+_sphere_drape(frames=2)
+print("--- draped ---", flush=True)
+"""
+
+
+def test_the_warm_up_loads_every_kernel_module_a_drape_runs():
+    """``synmitsuba warm`` (cloth.warm.compile_kernels) is worth running only if a simulation
+    after it has nothing left to compile: Warp logs each module it loads (from the disk cache or
+    compiled), and a drape after the warm-up logs none."""
+    import os
+    out = subprocess.run([sys.executable, "-c", WARM_CHILD.format(tests=os.path.dirname(__file__))],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    log = out.stdout + out.stderr
+    warmed, draped = log.index("--- warmed ---"), log.index("--- draped ---")
+    assert log[:warmed].count("Module newton.") >= 5  # the log shows loads
+    assert "Module " not in log[warmed:draped], log[warmed:draped]
+
+
+def test_the_warm_command_reports_each_step():
+    """``synmitsuba warm --only kernels`` as a user runs it (the kernels from the disk cache by now)."""
+    out = subprocess.run([sys.executable, "-m", "synmitsuba", "warm", "--only", "kernels"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert re.fullmatch(r"kernels: ready in \d+\.\d s", out.stdout.strip()), out.stdout
 
 
 def test_keep_outside_sets_points_in_or_near_a_sphere_its_margin_out_and_leaves_the_rest():

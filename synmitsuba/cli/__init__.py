@@ -19,7 +19,7 @@ from typing import Callable
 # Modules providing commands, in the order they appear in --help. A module that fails to
 # import (an optional extra missing) does not take the whole CLI down.
 COMMAND_MODULES = ("generate", "stats", "fit_smplx", "render", "compose", "show", "info", "subject", "motion",
-                   "fit_texture", "view", "export")
+                   "fit_texture", "view", "export", "warm")
 DESCRIPTION = ("synthetic, exactly annotated images of clothed, animated people, rendered with Mitsuba 3. "
                "Run 'synmitsuba COMMAND --help' for a command's options.")
 
