@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import time
+from typing import Callable
 
 
 def _kernels() -> None:
@@ -18,7 +19,7 @@ def _kernels() -> None:
 
 def run(args) -> int:
     from synmitsuba.body.anny_model import load_anny
-    steps = {"model": load_anny, "kernels": _kernels}
+    steps: dict[str, Callable[[], object]] = {"model": load_anny, "kernels": _kernels}
     for name in args.only or list(steps):
         t = time.perf_counter()
         steps[name]()
