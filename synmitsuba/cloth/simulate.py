@@ -219,8 +219,9 @@ def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
     stability clip 164); one with 31 %, in two triangles, was flung 1.6 m in a squat (clip 222).
     Most lie within 2.5 cm under the held line (over 10 dress clips: 4-22 a garment); the corners
     of a vent's hem (one and two triangles) are the others. Carried (``_Carry``), such a particle
-    goes where the cloth round it goes: held to the skinned garment, a vent's corner stayed at
-    the skinned hem while the cloth's hem rode up over a jogging knee, a 12 cm spike (clip 256)."""
+    goes where the cloth round it goes: held to the skinned garment, a vent's corner kept to the
+    skinned hem while the cloth's hem swung, its edges up to 3 cm past their cut in a jog (clip
+    256; carried, 4 mm)."""
     area = np.zeros(len(q))
     np.add.at(area, faces.ravel(), np.repeat(triangle_areas(q[faces]), 3))
     return area < SLIGHT * np.median(area[area > 0])
@@ -557,13 +558,14 @@ def _carried(pieces: list[ClothPiece]) -> np.ndarray:
 class _Carry:
     """The carried particles (``ClothPiece.carried``) and, for each, the particles within two
     edges of it that are not carried (``ring``; ``owner``: whose ring each is). Each step a
-    carried particle goes where a rigid fit of its ring's start positions (``start``) to their
-    present ones takes it: with the cloth round it, never flung, never left behind."""
+    carried particle goes where a rigid fit of its ring's rest positions (``rest``: the cloth's
+    rest shape) to their present ones takes it: with the cloth round it, never flung, never
+    left behind."""
 
     index: np.ndarray
     owner: np.ndarray
     ring: np.ndarray
-    start: np.ndarray
+    rest: np.ndarray
 
     @classmethod
     def of(cls, pieces: list[ClothPiece], q: np.ndarray) -> _Carry:
@@ -583,7 +585,7 @@ class _Carry:
         if not len(self.index):
             return q
         n = np.bincount(self.owner, minlength=len(self.index))[:, None]
-        a, b = self.start[self.ring], np.asarray(q[self.ring], np.float64)
+        a, b = self.rest[self.ring], np.asarray(q[self.ring], np.float64)
         ca, cb = np.zeros((len(self.index), 3)), np.zeros((len(self.index), 3))
         np.add.at(ca, self.owner, a)
         np.add.at(cb, self.owner, b)
@@ -594,7 +596,7 @@ class _Carry:
         flip = np.ones((len(self.index), 3))
         flip[:, 2] = np.sign(np.linalg.det(u) * np.linalg.det(vt))
         rot = np.einsum("cij,cj,cjk->cki", u, flip, vt)  # (u diag(flip) vt).T: b ~ rot a
-        q[self.index] = np.einsum("cij,cj->ci", rot, self.start[self.index] - ca) + cb
+        q[self.index] = np.einsum("cij,cj->ci", rot, self.rest[self.index] - ca) + cb
         return q
 
 
