@@ -571,6 +571,9 @@ class _Carry:
     def of(cls, pieces: list[ClothPiece], q: np.ndarray) -> _Carry:
         from scipy.sparse import coo_matrix
         carried, faces = _carried(pieces), _all_faces(pieces)[0]
+        if not carried.any():  # most pieces: no neighbourhoods to build
+            none = np.zeros(0, np.int64)
+            return cls(none, none, none, np.asarray(q, np.float64))
         pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
         near = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(q), len(q)))
         near = ((near + near.T) + (near + near.T) @ (near + near.T)).tocsr()  # within two edges
