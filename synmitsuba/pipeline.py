@@ -67,6 +67,8 @@ def render_sequence(spec: SceneSpec, frames=None, views=None, spp: int = 16, see
             p.fits = fit_subject(p.human, p.motion, [int(f) for f in frames], body_models)
     annotator = Annotator(placed) if annotate else None
     flows = SequenceFlow(scene, placed)
+    if annotator is not None and any(targets):
+        flows.prepare()
     for k, f in enumerate(frames):
         for p in placed:
             p.pose_in(scene, int(f))

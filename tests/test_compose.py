@@ -218,14 +218,31 @@ def test_spec_is_deterministic_and_round_trips_exactly(sm, spec):
 
 
 def test_render_sequence_moves_in_place_and_labels_frames(sm, spec):
+    """Frames move in place and carry labels and flow; every frame runs the first frame's path
+    tracer (flow's neighbour scenes are loaded before it: loaded after, their materials joined
+    the later frames' BSDF calls, and frame 0 compiled a kernel of its own, 4-7 s, used once)."""
+    import gc
+
+    import drjit as dr
+
     from synmitsuba.engine.build import STATS
-    out = []
+    out, tracers = [], []
     loads = None
     last = spec.n_frames - 1
-    for f, view, sample in sm.render_sequence(spec, frames=[0, 5, last], views=["cam0"], spp=1, seed=2):
-        out.append((f, view, sample))
-        if loads is None:
-            loads = STATS["loads"]
+    gc.collect()  # no earlier test's Mitsuba objects freed mid-sequence (drjit calls every live BSDF)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()  # reading clears it
+        for f, view, sample in sm.render_sequence(spec, frames=[0, 5, last], views=["cam0"], spp=1, seed=2):
+            out.append((f, view, sample))
+            tracers.append({k["hash"] for k in dr.kernel_history()
+                            if k.get("type") == dr.KernelType.JIT and k["operation_count"] >= 10000})
+            if loads is None:
+                loads = STATS["loads"]
+            gc.collect()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert len(tracers[0]) == 1 and all(t == tracers[0] for t in tracers), tracers
     assert STATS["loads"] == loads  # no reload after the first frame
     assert [f for f, _, _ in out] == [0, 5, last]
     first, mid, end = (o[2].passes for o in out)  # exact flow where the neighbouring frame exists

@@ -177,12 +177,19 @@ class _Neighbours:
     def __init__(self, scene, placed):
         self.placed, self.scene, self.copies, self.at = placed, scene, [], []
 
-    def __call__(self, g: int, f: int):
-        if not self.copies:  # all at once: every load happens on the first frame
+    def load(self) -> None:
+        """Make and load the three copies (once): before the first frame is rendered, so every
+        frame's path tracer is traced with the same Mitsuba objects alive. Loaded after it, the
+        copies' materials joined the BSDF calls of every later frame's kernel: frame 0 compiled
+        a kernel of its own (4-7 s on 2 cores) that no later frame could reuse."""
+        if not self.copies:
             self.copies = [geometry_copy(self.scene) for _ in range(3)]
             for copy in self.copies:
                 build(copy)
             self.at = [None] * 3
+
+    def __call__(self, g: int, f: int):
+        self.load()
         if g not in self.at:  # move the copy whose frame lies farthest from f (or none yet)
             k = max(range(3), key=lambda k: np.inf if self.at[k] is None else abs(self.at[k] - f))
             for p in self.placed:
@@ -211,6 +218,10 @@ class SequenceFlow:
 
     def __init__(self, scene: Scene, placed: list):
         self.scene, self.geometry, self.neighbours = scene, _GeometryCache(placed), _Neighbours(scene, placed)
+
+    def prepare(self) -> None:
+        """Load the neighbour scenes now, before the sequence's first render (see ``_Neighbours.load``)."""
+        self.neighbours.load()
 
     def add(self, sample, cameras: list, f: int, targets: dict) -> None:
         """Forward and backward flow of ``sample`` (frame ``f`` of a view whose camera at frame g
