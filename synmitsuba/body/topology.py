@@ -86,6 +86,22 @@ def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     return first[labels]
 
 
+def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, tol: float) -> np.ndarray:
+    """A representative index per vertex, as ``weld`` gives: the ends of every edge of ``faces``
+    shorter than ``tol`` (chains of them) share one, the lowest. Only edges join: two sheets
+    that lie close but apart stay apart."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(vertices)
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    short = edges[np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1) < tol]
+    graph = coo_matrix((np.ones(len(short)), (short[:, 0], short[:, 1])), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1]
+    first = np.full(labels.max() + 1, n)
+    np.minimum.at(first, labels, np.arange(n))
+    return first[labels]
+
+
 def closed_tube(rings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A closed surface through ``rings`` (K, M, 3), each a closed loop, fans capping both
     ends, faces wound outward."""

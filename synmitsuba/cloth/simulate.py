@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.garments import hem_sources
-from synmitsuba.body.topology import weld
+from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
 from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
@@ -159,7 +159,8 @@ class Collider:
 @dataclass
 class _Garment:
     """A subject's simulated garment: ``rows`` the layer vertex each particle is (the first of
-    its weld group), ``index`` the particle of each layer vertex but the hem band's; the band
+    its group: welded, short edges collapsed, ``_particles``), ``index`` the particle of each
+    layer vertex but the hem band's; the band
     (``band``: its vertices' edge vertices, ``depth``: how far in along the cloth's normal) is
     not simulated: its few-millimetre triangles are where VBD went unstable (pleated skirts),
     so it follows its edge."""
@@ -185,9 +186,8 @@ def simulated_garments(human) -> list[_Garment]:
         band = hem_sources(mesh)
         main = len(part.rest) - len(band)
         faces = part.faces[:len(part.faces) - mesh.hem[0]]
-        rows, index = np.unique(weld(part.rest[:main]), return_inverse=True)
-        index = index.reshape(-1)
-        cloth = _without_fins(index[faces])
+        rows, index = _particles(part.rest[:main], faces)
+        cloth = _without_fins(_proper(index[faces]))
         held = kind.held(part.rest[rows], human.regions)
         carried = slight(part.rest[rows], cloth) & ~held
         fabric = FABRICS[fabric_of(kind, mesh.params)]
@@ -196,6 +196,27 @@ def simulated_garments(human) -> list[_Garment]:
         piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows])
         out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth))
     return out
+
+
+SHORT = 0.002  # metres: a cloth edge shorter than this is collapsed to a point (see ``_particles``)
+
+
+def _particles(rest: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The garment's particles: ``rows``, the layer vertex each one is, and ``index``, the
+    particle of each layer vertex. Its uv seams are welded, and the ends of every edge under
+    ``SHORT`` are one particle: the cut between a dress's bodice and its skirt leaves vertices
+    0.4 mm apart and needles (22 x 22 x 0.5 mm) under the held line, which the solver's bending
+    flipped back and forth until a particle beside them ran off at 240 m/s, 3 m within a frame
+    (issue 34's stability clip 324: a shift in a jog)."""
+    rows, index = np.unique(weld(rest), return_inverse=True)
+    index = index.reshape(-1)
+    first, index2 = np.unique(collapse_short_edges(rest[rows], index[faces], SHORT), return_inverse=True)
+    return rows[first], index2.reshape(-1)[index]
+
+
+def _proper(faces: np.ndarray) -> np.ndarray:
+    """``faces`` but those with a corner twice (an edge collapsed)."""
+    return faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
 
 
 def _without_fins(faces: np.ndarray) -> np.ndarray:
