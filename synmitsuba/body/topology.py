@@ -74,28 +74,24 @@ def cut(faces: np.ndarray, phi: np.ndarray, *attributes: np.ndarray):
 def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     """A representative index per vertex: vertices within ``tol`` (chains of them) share one,
     the lowest of the group; unlike rounding, no grid splits two close points."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
-    n = len(vertices)
-    pairs = cKDTree(vertices).query_pairs(tol, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    labels = connected_components(graph, directed=False)[1]
-    first = np.full(labels.max() + 1, n)
-    np.minimum.at(first, labels, np.arange(n))
-    return first[labels]
+    return _lowest_joined(cKDTree(vertices).query_pairs(tol, output_type="ndarray"), len(vertices))
 
 
 def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, tol: float) -> np.ndarray:
     """A representative index per vertex, as ``weld`` gives: the ends of every edge of ``faces``
     shorter than ``tol`` (chains of them) share one, the lowest. Only edges join: two sheets
     that lie close but apart stay apart."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    n = len(vertices)
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     short = edges[np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1) < tol]
-    graph = coo_matrix((np.ones(len(short)), (short[:, 0], short[:, 1])), shape=(n, n))
+    return _lowest_joined(short, len(vertices))
+
+
+def _lowest_joined(pairs: np.ndarray, n: int) -> np.ndarray:
+    """For each of ``n`` vertices the lowest index of those that ``pairs`` (K, 2) join to it."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     labels = connected_components(graph, directed=False)[1]
     first = np.full(labels.max() + 1, n)
     np.minimum.at(first, labels, np.arange(n))
