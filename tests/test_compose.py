@@ -143,7 +143,9 @@ def test_composed_subjects_stand_apart_on_the_ground_at_every_frame(sm, spec):
             assert box[1] - 1e-6 <= v[:, 2].min() and v[:, 2].max() <= box[3] + 1e-6
             verts.append(v)
             lows.append(v[:, 1].min())
-        assert cKDTree(verts[0]).query(verts[1])[0].min() > 0.05
+        a, b = spec.subjects[0].frames[f], spec.subjects[1].frames[f]
+        gap = max(a[0] - b[2], b[0] - a[2], a[1] - b[3], b[1] - a[3])  # boxes apart: so are the vertices in them
+        assert gap > 0.05 or cKDTree(verts[0]).query(verts[1])[0].min() > 0.05
     lows = np.reshape(lows, (spec.n_frames, -1))
     assert (lows > -1e-6).all() and np.allclose(lows.min(0), 0, atol=1e-6)  # never sunk; touching at least once
     p.pose_in(scene, 0)
