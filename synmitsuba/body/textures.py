@@ -515,36 +515,45 @@ class UVSurface:
 def rasterise_uv(uv: np.ndarray, face_uv: np.ndarray, size: int) -> tuple[np.ndarray, ...]:
     """The texel centres (i + 0.5, ``uv`` v up, as ``paint_uv`` draws them) each face covers in a
     (size, size) atlas: (rows, cols, face, barycentric weights (N, 3)), in face order (a texel
-    two faces cover comes once per face, the later face last). Faces are tried in groups of
-    like size, each over the texel box its largest member needs."""
+    two faces cover comes once per face, the later face last), row by row within a face. Each
+    face is tried over its own texel box, faces taken in chunks of at most ``RASTER_CHUNK`` texels."""
     tri = np.stack([uv[face_uv][..., 0] * size, (1.0 - uv[face_uv][..., 1]) * size], -1)  # (F, 3, 2) x, y
     lo = np.floor(tri.min(1) - 0.5).astype(np.int64)
-    spans = np.ceil((tri.max(1) - lo).max(1)).astype(np.int64) + 1
-    group = np.ceil(np.log2(np.maximum(spans, 1))).astype(np.int64)
-    out = [_rasterise(tri[sel], lo[sel], int(spans[sel].max()), size, sel)
-           for sel in (np.flatnonzero(group == g) for g in np.unique(group))]
-    rows, cols, faces, w = (np.concatenate([o[k] for o in out]) for k in range(4))
-    order = np.argsort(faces, kind="stable")
-    return rows[order], cols[order], faces[order], w[order]
+    wh = np.ceil(tri.max(1) - lo).astype(np.int64) + 1  # (F, 2) texels across and down each face's box
+    count = wh[:, 0] * wh[:, 1]
+    ends = np.cumsum(count)
+    out, first = [], 0
+    while first < len(tri):
+        last = max(int(np.searchsorted(ends, (ends[first - 1] if first else 0) + RASTER_CHUNK, "right")), first + 1)
+        out.append(_rasterise(tri[first:last], lo[first:last], wh[first:last], size, first))
+        first = last
+    if not out:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3))
+    return tuple(np.concatenate([o[k] for o in out]) for k in range(4))
 
 
-def _rasterise(tri: np.ndarray, lo: np.ndarray, span: int, size: int, index: np.ndarray) -> tuple[np.ndarray, ...]:
+RASTER_CHUNK = 1 << 21  # candidate texels a chunk of faces holds at once (a few tens of MB)
+
+
+def _rasterise(tri: np.ndarray, lo: np.ndarray, wh: np.ndarray, size: int, first: int) -> tuple[np.ndarray, ...]:
     """``rasterise_uv`` of the triangles ``tri`` (F, 3, 2) in texels, each searched over the
-    ``span`` x ``span`` texels from its ``lo`` corner; faces named by ``index``."""
-    oy, ox = np.mgrid[0:span, 0:span]
-    px = lo[:, None, 0] + ox.ravel()[None]  # (F, span^2) candidate texels
-    py = lo[:, None, 1] + oy.ravel()[None]
+    ``wh`` texels across and down from its ``lo`` corner; faces numbered from ``first``."""
+    count = wh[:, 0] * wh[:, 1]
+    f = np.repeat(np.arange(len(tri)), count)
+    k = np.arange(len(f)) - np.repeat(np.cumsum(count) - count, count)
+    width = wh[f, 0]
+    px, py = lo[f, 0] + k % width, lo[f, 1] + k // width  # candidate texels, row by row
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     e1, e2 = b - a, c - a
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     det = np.where(np.abs(det) < 1e-12, 1e-12, det)
-    qx, qy = px + 0.5 - a[:, None, 0], py + 0.5 - a[:, None, 1]
-    w1 = (qx * e2[:, None, 1] - qy * e2[:, None, 0]) / det[:, None]
-    w2 = (e1[:, None, 0] * qy - e1[:, None, 1] * qx) / det[:, None]
+    qx, qy = px + 0.5 - a[f, 0], py + 0.5 - a[f, 1]
+    w1 = (qx * e2[f, 1] - qy * e2[f, 0]) / det[f]
+    w2 = (e1[f, 0] * qy - e1[f, 1] * qx) / det[f]
     w0 = 1.0 - w1 - w2
-    inside = (w0 >= -1e-6) & (w1 >= -1e-6) & (w2 >= -1e-6) & (px >= 0) & (py >= 0) & (px < size) & (py < size)
-    f, k = np.nonzero(inside)
-    return py[f, k], px[f, k], index[f], np.stack([w0[f, k], w1[f, k], w2[f, k]], 1)
+    inside = np.flatnonzero((w0 >= -1e-6) & (w1 >= -1e-6) & (w2 >= -1e-6) & (px >= 0) & (py >= 0) & (px < size)
+                            & (py < size))
+    return py[inside], px[inside], f[inside] + first, np.stack([w0[inside], w1[inside], w2[inside]], 1)
 
 
 def uv_surface(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray, uv: np.ndarray, face_uv: np.ndarray,
