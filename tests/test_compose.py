@@ -615,3 +615,16 @@ def test_a_lone_subject_whose_clip_fits_nowhere_gets_a_new_motion(sm):
            "cameras": {"mode": "ring", "count": 2, "ring_distance": 3.2, "width": 32, "height": 32, "hfov_deg": [40, 40]}}
     spec = sm.compose_scene(cfg, np.random.default_rng(0), seed=0)
     assert len(spec.subjects) == 1 and len(spec.views) == 2
+
+
+def test_frame_hulls_are_scipys_hull_of_every_point():
+    """The octagon filter before Qhull drops no hull vertex: the hull of a few hundred points
+    (ties, collinear runs, a thin cloud) is scipy's hull of all of them."""
+    from scipy.spatial import ConvexHull
+    from synmitsuba.compose.placement import frame_hulls
+    rng = np.random.default_rng(3)
+    clouds = [rng.normal(size=(400, 2)), np.round(rng.normal(size=(400, 2)), 1),
+              rng.integers(0, 4, (400, 2)).astype(float), rng.uniform(-1, 1, (400, 2)) * [1, 0.01]]
+    for pts, hull in zip(clouds, frame_hulls(clouds)):
+        want = pts[ConvexHull(pts).vertices]
+        assert sorted(map(tuple, hull)) == sorted(map(tuple, want))

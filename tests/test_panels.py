@@ -112,3 +112,20 @@ def test_no_texel_is_drawn_in_two_places(kind):
     np.maximum.at(hi, texel, at)
     seen = np.isfinite(lo).all(1)
     assert np.linalg.norm(hi[seen] - lo[seen], axis=1).max() < 0.03
+
+
+def test_a_face_with_no_area_in_the_atlas_covers_at_most_its_own_texel_box():
+    """A face whose three uv corners coincide has weights (1, 0, 0) wherever it is tried: it
+    may cover only texels within 1.5 of its point (its own box), never a larger search window."""
+    p = 32.3 / 64  # the point, 32.3 texels in; a small face of 2-3 texels' reach beside it, a large one
+    small = np.array([[10.2, 10.2], [12.0, 10.2], [10.2, 12.0]]) / 64
+    uv = np.array([[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], *small, [p, p], [p, p], [p, p]])
+    rows, cols, f, w = rasterise_uv(uv, np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]]), 64)
+    point = f == 2
+    assert 0 < point.sum() <= 9 and (np.abs(cols[point] + 0.5 - 32.3) <= 1.5).all()
+    assert (np.abs(rows[point] + 0.5 - (64 - 32.3)) <= 1.5).all()
+    big = f == 0  # the large face: texel centres inside its triangle, counted independently
+    yy, xx = np.mgrid[0:64, 0:64] + 0.5
+    u, v = xx / 64, 1 - yy / 64
+    inside = (u >= 0.1) & (v >= 0.1) & (u + v <= 1.0)
+    assert abs(int(big.sum()) - int(inside.sum())) <= 64 * 0.05 * 3  # edges within a few texels
