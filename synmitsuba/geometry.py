@@ -7,6 +7,8 @@ direction, and the camera-ray matrix ``R^T K^-1`` every camera consumer uses.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 
@@ -152,6 +154,28 @@ def face_cross(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     cross[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
     cross[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     return cross
+
+
+def unique_rows(rows: np.ndarray, return_index: bool = False, return_inverse: bool = False,
+                return_counts: bool = False):
+    """``np.unique(rows, axis=0, ...)`` for an (N, K) integer array, the same rows in the same
+    order with the same index, (N,) inverse and counts, from one int64 key a row (mixed radix
+    over each column's range; numpy's own axis=0 path when that key would overflow). numpy
+    sorts rows as structured records: 8x slower on a body's 85,000 corner pairs."""
+    rows = np.asarray(rows)
+    flags: dict[str, Any] = dict(return_index=return_index, return_inverse=return_inverse, return_counts=return_counts)
+    if rows.ndim != 2 or not len(rows) or rows.dtype.kind not in "iu":
+        return np.unique(rows, axis=0, **flags)
+    lo = rows.min(0).astype(np.int64)
+    span = rows.max(0).astype(np.int64) - lo + 1
+    if np.sum(np.log2(span.astype(np.float64))) >= 62:
+        return np.unique(rows, axis=0, **flags)
+    stride = np.concatenate([np.cumprod(span[::-1])[::-1][1:], [1]])
+    key = (rows.astype(np.int64) - lo) @ stride
+    out = np.unique(key, **flags)
+    first = out[0] if isinstance(out, tuple) else out
+    unique = (first[:, None] // stride % span + lo).astype(rows.dtype)
+    return (unique, *out[1:]) if isinstance(out, tuple) else unique
 
 
 class SmoothNormals:

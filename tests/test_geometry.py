@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from synmitsuba.geometry import (align_vectors, axis_rotation, camera_ray_matrix, euler_to_matrix, frame,
-                                 slerp_matrices, SmoothNormals, triangle_areas, vertex_normals)
+                                 slerp_matrices, SmoothNormals, triangle_areas, unique_rows, vertex_normals)
 
 from reference import winding_numbers
 
@@ -141,3 +141,21 @@ def test_winding_numbers_and_signed_distance_agree_with_a_torus():
         whole = MeshIndex(m.vertices, m.faces).pseudonormals(tri, bary)
         np.testing.assert_allclose(local / np.linalg.norm(local, axis=1, keepdims=True),
                                    whole / np.linalg.norm(whole, axis=1, keepdims=True), atol=1e-9)
+
+
+def test_unique_rows_is_numpys_unique_over_rows():
+    """Same rows, order, first indices, inverse and counts as ``np.unique(axis=0)``: pairs and
+    triples, negative values, int32 and int64, one row, and ranges too wide for one key."""
+    import itertools
+    rng = np.random.default_rng(4)
+    arrays = [rng.integers(lo, hi, (n, k)).astype(dtype) for lo, hi, n, k, dtype in
+              [(0, 3, 200, 2, np.int64), (-40, 40, 300, 2, np.int32), (0, 100000, 500, 2, np.int64),
+               (0, 6, 300, 3, np.int64), (-5, 5, 1, 2, np.int64), (-2 ** 40, 2 ** 40, 50, 2, np.int64)]]
+    arrays.append(np.repeat(arrays[0], 3, axis=0)[::-1].copy())  # every row several times, unsorted
+    for a, flags in itertools.product(arrays, itertools.product([False, True], repeat=3)):
+        kw = dict(zip(("return_index", "return_inverse", "return_counts"), flags))
+        want, got = np.unique(a, axis=0, **kw), unique_rows(a, **kw)
+        want, got = (want, got) if any(flags) else ((want,), (got,))
+        assert len(got) == len(want)
+        for w, g in zip(want, got):
+            assert g.dtype == w.dtype and np.array_equal(g, w)

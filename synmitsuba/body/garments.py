@@ -23,7 +23,7 @@ from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_point
                                    lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, weld
-from synmitsuba.geometry import face_normals, vertex_normals
+from synmitsuba.geometry import face_normals, unique_rows, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
 
@@ -1035,7 +1035,7 @@ def open_edges(f: np.ndarray, merged: np.ndarray | None = None) -> np.ndarray:
     directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
     merged = np.arange(f.max() + 1) if merged is None else merged
     m = np.sort(merged[directed], 1)
-    _, inv, counts = np.unique(m, axis=0, return_inverse=True, return_counts=True)
+    _, inv, counts = unique_rows(m, return_inverse=True, return_counts=True)
     return directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]
 
 
@@ -1050,7 +1050,7 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
     copies of a vertex (the render topology splits at UV seams) move as one: no crack opens."""
     rep = weld(v)
     ff = rep[f]
-    edges = np.unique(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]), axis=0)
+    edges = unique_rows(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]))
     p = v[rep].copy()
     up = np.where((p[edges[:, 0], 1] > p[edges[:, 1], 1])[:, None], edges, edges[:, ::-1])  # (upper, lower)
     up = up[hanging[rep][up].all(1)]  # hanging from hanging cloth: a sleeve is no torso's rail

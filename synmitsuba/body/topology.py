@@ -5,6 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synmitsuba.geometry import unique_rows
+
 
 @dataclass
 class SplitMesh:
@@ -15,7 +17,7 @@ class SplitMesh:
 
 def split_at_seams(faces: np.ndarray, face_uv: np.ndarray, uv: np.ndarray) -> SplitMesh:
     pairs = np.stack([faces.ravel(), face_uv.ravel()], 1)
-    unique, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    unique, inverse = unique_rows(pairs, return_inverse=True)
     return SplitMesh(unique[:, 0], uv[unique[:, 1]], inverse.reshape(-1, 3))
 
 
@@ -47,7 +49,7 @@ def clip_faces(faces: np.ndarray, phi: np.ndarray, snap: float = 0.02):
     a, b, c = rot.T
     edges = np.concatenate([np.stack([a, b], 1), np.stack([c, a], 1)])
     key = np.sort(edges, 1)
-    pairs, index = np.unique(key, axis=0, return_inverse=True)
+    pairs, index = unique_rows(key, return_inverse=True)
     index = index.ravel()
     p_ab, p_ca = V + index[:len(a)], V + index[len(a):]
     one = ins.sum(1) == 1  # the odd vertex is the one kept

@@ -31,7 +31,7 @@ from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
 from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.errors import ConfigError, SynMitsubaError
-from synmitsuba.geometry import rigid_fit, triangle_areas, vertex_normals
+from synmitsuba.geometry import rigid_fit, triangle_areas, unique_rows, vertex_normals
 from synmitsuba.schema import POSITIVE, Check, Flag, Nested, Number, check_fields, optional, spec
 
 
@@ -225,7 +225,7 @@ def _without_fins(faces: np.ndarray) -> np.ndarray:
     edges of three triangles, one of four) that Newton read as non-manifold: its bending edges
     and the solver's colouring went wrong ("node_idx -1 is out of range", the README's turn).
     Without the fin each seam edge joins the two halves' triangles alone."""
-    _, inverse, count = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True)
+    _, inverse, count = unique_rows(np.sort(faces, axis=1), return_inverse=True, return_counts=True)
     return faces[count[inverse.reshape(-1)] == 1]
 
 
@@ -427,7 +427,7 @@ def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int) -> l
             continue
         f = faces[pick]
         directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-        _, first, count = np.unique(np.sort(directed, axis=1), axis=0, return_index=True, return_counts=True)
+        _, first, count = unique_rows(np.sort(directed, axis=1), return_index=True, return_counts=True)
         cut = directed[first[count == 1]]  # (a, b) as the part's own faces run round it
         loops = _loops(cut)
         used, local = np.unique(f, return_inverse=True)  # the cut's vertices are the faces' too
@@ -635,7 +635,7 @@ class _Edges:
 
     @classmethod
     def of(cls, faces: np.ndarray, held: np.ndarray, q: np.ndarray) -> _Edges:
-        pairs = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+        pairs = unique_rows(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1))
         pairs = pairs[~held[pairs].all(axis=1)]
         return cls(pairs, _lengths(q, pairs))
 
