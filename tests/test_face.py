@@ -363,3 +363,29 @@ def test_palms_and_soles_are_lighter_than_the_backs_of_hands_and_feet():
     assert skin_l < 45  # a dark skin, where palms differ most
     for light, dark in ((hand & (n @ -back > 0.8), hand & (n @ back > 0.8)), (foot & (n[:, 1] < -0.9), foot & (n[:, 1] > 0.8))):
         assert lightness(np.flatnonzero(light)) - lightness(np.flatnonzero(dark)) > (82 - skin_l) / 4
+
+
+def test_ray_distances_are_where_each_ray_meets_each_triangles_plane_inside_it():
+    """Against the plane's equation and barycentric coordinates from a 2 x 2 solve, away from
+    edges (where either answer may round to a hit or a miss); 60 rays x 400 triangles."""
+    from synmitsuba.body.brows import ray_distances
+    rng = np.random.default_rng(8)
+    origin = rng.normal(size=3) * 0.01
+    tri = rng.normal(size=(400, 3, 3)) * 0.03 + rng.normal(size=(400, 1, 3)) * 0.05
+    dirs = rng.normal(size=(60, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    got = ray_distances(origin, dirs, tri)
+    clear = 0
+    for i, d in enumerate(dirs):
+        for j, (a, b, c) in enumerate(tri):
+            n = np.cross(b - a, c - a)
+            t = n @ (a - origin) / (n @ d)
+            e = np.stack([b - a, c - a], 1)
+            uv = np.linalg.solve(e.T @ e, e.T @ (origin + t * d - a))
+            margin = min(uv[0], uv[1], 1 - uv.sum(), t)
+            if margin > 1e-6:
+                assert got[i, j] == pytest.approx(t, rel=1e-9)
+                clear += 1
+            elif margin < -1e-6:
+                assert np.isinf(got[i, j])
+    assert clear > 100
