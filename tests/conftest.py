@@ -2,6 +2,7 @@
 stays in the user's cache, ``ANNY_CACHE_DIR`` or ``~/.cache/anny``, shared with ``make demo`` and
 every checkout, as README says), idle OpenMP threads that sleep, the default variant, Warp's
 kernels forward-only as the CLI has them."""
+import dataclasses
 import os
 import pathlib
 
@@ -20,6 +21,18 @@ from synmitsuba.process import SETTINGS  # noqa: E402
 # the cloth stage's Warp kernels compiled forward-only, as the CLI and generation workers have them
 # (process.configure_process): the cloth is the same to the bit, compiled in 52 s instead of 127 s
 SETTINGS.forward_only_kernels = True
+
+
+@pytest.fixture(autouse=True)
+def _process_settings_restored():
+    """Each test starts as a library user's process: a test that runs the CLI or a generation
+    in this worker opts the process in (``configure_process``), and that stayed for the rest of
+    the worker's tests (a full ``gc.collect()`` before every later scene load: 66 s of the
+    suite's 1,900)."""
+    saved = dataclasses.replace(SETTINGS)
+    yield
+    for f in dataclasses.fields(SETTINGS):
+        setattr(SETTINGS, f.name, getattr(saved, f.name))
 
 
 def colour_science():
