@@ -161,7 +161,7 @@ def unique_rows(rows: np.ndarray, return_index: bool = False, return_inverse: bo
     """``np.unique(rows, axis=0, ...)`` for an (N, K) integer array, the same rows in the same
     order with the same index, (N,) inverse and counts, from one int64 key a row (mixed radix
     over each column's range; numpy's own axis=0 path when that key would overflow). numpy
-    sorts rows as structured records: 8x slower on a body's 85,000 corner pairs."""
+    sorts rows as structured records: 7x slower on a body's 85,000 corner pairs."""
     rows = np.asarray(rows)
     flags: dict[str, Any] = dict(return_index=return_index, return_inverse=return_inverse, return_counts=return_counts)
     if rows.ndim != 2 or not len(rows) or rows.dtype.kind not in "iu":
