@@ -12,7 +12,7 @@ export DRJIT_CACHE_DIR ?= $(CURDIR)/.cache/drjit
 
 PROBE := $(PY) -c "from synmitsuba.engine.llvm import main; raise SystemExit(main(['--probe']))"
 
-.PHONY: setup llvm demo lint warm test test-all bench bench-cycles clean
+.PHONY: setup llvm demo lint warm warm-model warm-kernels test test-all bench bench-cycles clean
 
 setup: $(STAMP) llvm
 
@@ -50,13 +50,16 @@ lint: setup   # ruff, and mypy over the package (settings in pyproject.toml)
 	$(VENV)/bin/ruff check synmitsuba tests bench
 	$(VENV)/bin/mypy
 
-warm: setup   # anny's model cache and the cloth stage's Warp kernels, built once per machine
-	$(VENV)/bin/synmitsuba warm
+warm: warm-model warm-kernels   # anny's model cache and the cloth stage's Warp kernels, built once per machine
 
-# the linters beside the warm-up (on a fresh machine each takes about a minute: one core each), so
-# the test workers neither build anny's model cache twice at once nor wait on Warp's compiler
+warm-model warm-kernels: setup
+	$(VENV)/bin/synmitsuba warm --only $(@:warm-%=%)
+
+# the linters beside the two warm-ups (on a fresh machine: about 1, 2 and 1.3 minutes of one core
+# each; in turn, the warm-ups kept one core idle for two of their three minutes), so the test
+# workers neither build anny's model cache twice at once nor wait on Warp's compiler
 test: setup   # test files spread over the cores (at most 4 workers: each holds a body model)
-	$(MAKE) --no-print-directory -j2 --output-sync=target lint warm
+	$(MAKE) --no-print-directory -j3 --output-sync=target lint warm
 	$(PY) -m pytest -q -n auto --maxprocesses 4 --dist loadfile --durations=20  # the slowest, to keep it under ~15 min
 
 test-all: setup
