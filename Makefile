@@ -55,9 +55,9 @@ warm: warm-model warm-kernels   # anny's model cache and the cloth stage's Warp 
 warm-model warm-kernels: setup
 	$(VENV)/bin/synmitsuba warm --only $(@:warm-%=%)
 
-# the linters beside the two warm-ups (on a fresh machine: about 1, 2 and 1.3 minutes of one core
-# each; in turn, the warm-ups kept one core idle for two of their three minutes), so the test
-# workers neither build anny's model cache twice at once nor wait on Warp's compiler
+# the linters beside the two warm-ups, all three at once (on a fresh 2-core machine the model takes
+# about 2 minutes and the kernels 1.2: one after the other, beside the linters, 186 s; at once 155 s),
+# so the test workers neither build anny's model cache twice at once nor wait on Warp's compiler
 test: setup   # test files spread over the cores (at most 4 workers: each holds a body model)
 	$(MAKE) --no-print-directory -j3 --output-sync=target lint warm
 	$(PY) -m pytest -q -n auto --maxprocesses 4 --dist loadfile --durations=20  # the slowest, to keep it under ~15 min
