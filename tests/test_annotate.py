@@ -321,6 +321,39 @@ def test_every_label_survives_the_files(sm, tmp_path):
                                   np.asarray(b[k], dtype=object if b[k] is None else None)), k
 
 
+def test_a_cast_from_arrays_at_any_address_runs_one_kernel(sm):
+    """``cast`` answers by the distances worked out by hand (rays down -z from z = 3 meet a sheet
+    at z = 0 inside it, nothing outside), and ten casts with the heap stirred between them (the
+    float32 copies of the rays land at other addresses) run the kernel compiled for the first:
+    drjit reads numpy's memory in place and compiled a variant for each alignment of each of the
+    seven inputs (about 20 kernels compiled again in every process that casts, and a new one
+    whenever the heap moved an array)."""
+    import drjit as dr
+
+    from synmitsuba.engine.raycast import cast
+    scene = sm.Scene()
+    scene.add_mesh("sheet", np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]), np.array([[0, 1, 2], [0, 2, 3]]),
+                   instance=4)
+    n = 36
+    x = np.linspace(-1.5, 1.5, n)  # none on the sheet's edges
+    o, d, maxt = np.column_stack([x, np.zeros(n), np.full(n, 3.0)]), np.tile([0.0, 0.0, -1.0], (n, 1)), np.full(n, 10.0)
+    cast(scene, o, d, maxt)  # the scene loaded first: its own kernels are not the cast's
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    kernels, stir = [], []
+    try:
+        for k in range(10):
+            stir += [np.empty(1 + 3 * k, np.float32)]  # kept: the next casts' arrays go elsewhere
+            dr.kernel_history()  # reading clears it
+            ids, t = cast(scene, o, d, maxt)
+            kernels.append({k["hash"] for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT})
+            inside = np.abs(x) < 1
+            assert (ids[inside] == 4).all() and np.allclose(t[inside], 3.0, atol=1e-6)
+            assert (ids[~inside] == 0).all() and np.isinf(t[~inside]).all()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert all(k == kernels[0] for k in kernels), kernels
+
+
 def test_rays_pass_through_everything_but_the_shapes_asked_for(sm):
     """``hits_through`` against distances worked out by hand: rays down -z from z = 5 pass a
     sheet at z = 0 and a curtain of 400 strands (one ray meets every one of them) to the target

@@ -18,10 +18,10 @@ def _intersect(scene: Scene, origins, directions, maxt=None, coherent: bool = Fa
     built = build(scene)
     d = np.asarray(directions, np.float64)
     o = np.broadcast_to(np.asarray(origins, np.float64), d.shape)
-    ray = mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k].astype(np.float32)) for k in range(3))),
-                   mi.Vector3f(*(mi.Float(d[:, k].astype(np.float32)) for k in range(3))))
+    ray = mi.Ray3f(mi.Point3f(*(aligned_floats(o[:, k]) for k in range(3))),  # one kernel at any address
+                   mi.Vector3f(*(aligned_floats(d[:, k]) for k in range(3))))
     if maxt is not None:
-        ray.maxt = mi.Float(np.broadcast_to(np.asarray(maxt, np.float64), len(d)).astype(np.float32))  # type: ignore[assignment]
+        ray.maxt = aligned_floats(np.broadcast_to(np.asarray(maxt, np.float64), len(d)))  # type: ignore[assignment]
     si = built.mi_scene.ray_intersect_preliminary(ray, coherent=coherent)
     hit = si.is_valid()
     return built, si, hit, dr.reinterpret_array(mi.UInt32, si.shape)
