@@ -20,6 +20,7 @@ import dataclasses
 
 import numpy as np
 
+from synmitsuba.engine.build import aligned_floats
 from synmitsuba.errors import ConfigError
 from synmitsuba.schema import Number
 
@@ -50,7 +51,7 @@ def _evaluate(emitter, directions: np.ndarray) -> np.ndarray:
     import drjit as dr
     import mitsuba as mi
     si = dr.zeros(mi.SurfaceInteraction3f, len(directions))
-    si.wi = mi.Vector3f(*(-directions.T.astype(np.float32)))
+    si.wi = mi.Vector3f(*(aligned_floats(-c) for c in directions.T))  # one kernel at any address
     return np.asarray(emitter.eval(si), dtype=np.float64).T
 
 
@@ -70,8 +71,8 @@ class SoftSun:
         dirs = texel_directions(self.height, self.width)
         self.sky = _evaluate(sky, dirs.reshape(-1, 3)).reshape(*dirs.shape[:2], 3).astype(np.float32)
         self.irradiance = self._sun_irradiance(full, sky, np.asarray(env.sun_direction, dtype=np.float64))
-        self._dirs = mi.Vector3f(*(dirs.reshape(-1, 3).T.astype(np.float32)))
-        self._sky = mi.Color3f(*(self.sky.reshape(-1, 3).T))
+        self._dirs = mi.Vector3f(*(aligned_floats(c) for c in dirs.reshape(-1, 3).T))
+        self._sky = mi.Color3f(*(aligned_floats(c) for c in self.sky.reshape(-1, 3).T))
 
     @staticmethod
     def _sun_irradiance(full, sky, sun: np.ndarray) -> np.ndarray:
