@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from synmitsuba.body.textures import GarmentTextureParams, _pattern_mask, _uv_grid, lab_to_linear_rgb
+from synmitsuba.engine.build import aligned_floats
 from synmitsuba.errors import ConfigError
 
 
@@ -83,7 +84,6 @@ class ProceduralTexture:
     pattern over ``coords`` (the garment's panels: its material's ``pattern_coords``) when given."""
 
     def __init__(self, params: GarmentTextureParams, size: int, coords: np.ndarray | None = None):
-        import mitsuba as mi
         if not isinstance(params, GarmentTextureParams):
             raise ConfigError("texture", type(params).__name__, "give a GarmentTextureParams (a garment's .texture)")
         if coords is not None and np.shape(coords) != (size, size, 2):
@@ -92,7 +92,7 @@ class ProceduralTexture:
         self.params, self.size = params, int(size)
         v, u = (np.mgrid[:size, :size] + 0.5) / size
         v = 1 - v
-        self._u, self._v = mi.Float(u.ravel()), mi.Float(v.ravel())
+        self._u, self._v = aligned_floats(u), aligned_floats(v)  # each at one alignment: one kernel at any address
         s = params.uv_scale  # the uv transform before the phase (uv_offset) is added
         if coords is None:
             u = u * params.uv_aspect  # as body.textures._uv_grid: metres along u as along v
@@ -101,13 +101,13 @@ class ProceduralTexture:
             u, v = coords[..., 0].astype(np.float64), coords[..., 1].astype(np.float64)
             step = np.maximum(*(np.hypot(*np.gradient(c)) for c in (u, v)))
         a = np.radians(params.uv_rotation_deg)
-        self._x0 = mi.Float(((np.cos(a) * u - np.sin(a) * v) * s).ravel())
-        self._y0 = mi.Float(((np.sin(a) * u + np.cos(a) * v) * s).ravel())
-        self._texel = mi.Float((step * s).ravel())  # one texel in the transformed coordinates
+        self._x0 = aligned_floats((np.cos(a) * u - np.sin(a) * v) * s)
+        self._y0 = aligned_floats((np.sin(a) * u + np.cos(a) * v) * s)
+        self._texel = aligned_floats(step * s)  # one texel in the transformed coordinates
         self._camouflage = None
         if params.pattern == "camouflage":
             x, y = _uv_grid(params, size, coords)
-            self._camouflage = mi.Float(np.clip(_pattern_mask(params, x, y), 0, 1).ravel())
+            self._camouflage = aligned_floats(np.clip(_pattern_mask(params, x, y), 0, 1))
 
     def initial(self) -> dict:
         """The variables' values that reproduce ``params``, as drjit values."""
