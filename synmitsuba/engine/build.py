@@ -148,11 +148,13 @@ def _curves(shape: CurveShape):
 
 
 def aligned_floats(arr: np.ndarray, align: int = 64):
-    """``mi.Float`` of ``arr``'s values from a buffer at an address divisible by ``align``.
-    drjit maps a numpy array without copying, and reads control points (x, y, z, r) as one
-    packet only when their address allows it: from numpy's own allocations (16-byte aligned at
-    varying offsets) the path tracer came in two or three variants, 6 operations apart, one
-    compiled (or read from disk, and kept in memory) whenever the heap handed out a new offset."""
+    """``mi.Float`` of ``arr``'s values (as float32) from a buffer at an address divisible by
+    ``align``: for every array a kernel reads lane by lane. drjit maps a float32 numpy array
+    without copying (and converts a float64 one into a copy on the heap), and its LLVM backend
+    writes the alignment it finds into the kernel: from numpy's allocations (16-byte aligned at
+    varying offsets) the path tracer came in two or three variants (the curves' control points)
+    and a ray cast in up to 2^7 (its seven inputs), one compiled, or read from disk, whenever
+    the heap handed out a new offset."""
     import mitsuba as mi
     flat = np.ravel(arr).astype(np.float32, copy=False)
     buf = np.empty(len(flat) + align // 4, np.float32)
