@@ -2,8 +2,9 @@
 over 1,000 random subject x motion clips"), resumable: one JSON line per clip is appended to
 ``--log``, and a later run skips the clips logged, so the count grows run by run
 (a clip takes about a minute on one core of this CPU; 1,000 is more than one session holds).
-Only rows logged on ``--since`` (``SAME_CLOTH_SINCE``) or later code count: a clip measured
-on an older cloth stage is run again, and the summary is over the counted rows.
+Only rows logged on ``--since`` (default ``SAME_CLOTH_SINCE``, a commit per garment kind) or
+later code count: a clip measured on an older cloth stage is run again, and the summary is over
+the counted rows.
 
 Clip ``k`` is drawn from ``numpy.random.default_rng(k)``: subjects are sampled as
 ``sample_subject`` draws them (``cloth: simulated``) until one wears a garment the cloth stage
@@ -26,7 +27,7 @@ Prints a JSON summary of the counted rows (clips over half a metre in either: wo
     python bench/cloth_stability.py [--clips 1000] [--seconds 1.0] [--log bench/cloth_stability.jsonl]
                                     [--until SECONDS]   # stop starting clips after this long
                                     [--from K]          # start at clip K (skipping clips logged)
-                                    [--since REV | all] # count rows from REV's code on (default SAME_CLOTH_SINCE)
+                                    [--since REV | all] # count rows from REV's code on (default: SAME_CLOTH_SINCE)
 """
 import argparse
 import json
@@ -37,11 +38,12 @@ import time
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-# The first commit whose cloth stage simulates as today's: 4dcabac collapsed edges under 2 mm (dresses, shifts
-# and wraps changed); the commits since changed speed and labels, not the cloth (clips logged on them and run
-# again on today's checkout gave the figures logged: bench/RESULTS.md, session 85). Clips logged on older code
-# run again. A commit that changes what the stage computes moves this to itself.
-SAME_CLOTH_SINCE = "4dcabac"
+# Per garment kind, the first commit whose cloth stage simulates it as today's: ed120b5 made the rest shape the
+# garment as cut; 4dcabac collapsed edges under 2 mm, which skirts do not have (their shortest is 8 mm: clip 641,
+# logged between the two, gave the same figures on today's checkout), so dresses, shifts and wraps count from it.
+# The commits since changed speed and labels, not the cloth (bench/RESULTS.md, session 85). Clips logged on older
+# code run again. A commit that changes what the stage computes for a kind moves its entry to itself.
+SAME_CLOTH_SINCE = {"skirt": "ed120b5", "dress": "4dcabac", "shift": "4dcabac", "wrap": "4dcabac"}
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
@@ -150,11 +152,18 @@ def _revision() -> str:
     return git("rev-parse", "--short", "HEAD") + ("+dirty" if dirty else "")
 
 
-def since_filter(since: str | None):
-    """A test of a log row: logged on ``since`` or a commit after it (None: every row). Rows
-    from older code, a ``+dirty`` tree or before revisions were logged fail it: they measured
-    another cloth stage, so the clip is run again and only the new row counts."""
-    memo: dict[str, bool] = {}
+def since_filter(since: dict[str, str] | str | None):
+    """A test of a log row: logged on ``since`` (a commit, or one per garment kind) or a commit
+    after it (None: every row). Rows from older code, a ``+dirty`` tree or before revisions were
+    logged fail it: they measured another cloth stage, so the clip is run again and only the
+    new row counts."""
+    memo: dict[tuple[str, str], bool] = {}
+
+    def after(first: str, rev: str) -> bool:
+        if (first, rev) not in memo:
+            memo[first, rev] = subprocess.run(["git", "merge-base", "--is-ancestor", first, rev], cwd=HERE,
+                                              capture_output=True).returncode == 0
+        return memo[first, rev]
 
     def counts(row: dict) -> bool:
         rev = row.get("rev")
@@ -162,10 +171,8 @@ def since_filter(since: str | None):
             return True
         if not rev or rev.endswith("+dirty"):
             return False
-        if rev not in memo:
-            memo[rev] = subprocess.run(["git", "merge-base", "--is-ancestor", since, rev], cwd=HERE,
-                                       capture_output=True).returncode == 0
-        return memo[rev]
+        kinds = {g.split("/")[0] for g in row["garments"]}
+        return all(after(since if isinstance(since, str) else since[k], rev) for k in kinds)
     return counts
 
 
@@ -183,11 +190,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--from", dest="first", type=int, default=0,
                     help="first clip to run; clips already in the log are skipped (two processes sharing one log "
                          "take two ranges, e.g. --from 0 and --from 500)")
-    ap.add_argument("--since", default=SAME_CLOTH_SINCE,
+    ap.add_argument("--since", default=None,
                     help="count only rows logged on this commit or later ones; clips logged on older code run again "
-                         "(default: the first commit whose cloth stage simulates as today's; 'all' counts every row)")
+                         "(default: SAME_CLOTH_SINCE, per garment kind; 'all' counts every row)")
     args = ap.parse_args(argv)
-    counts = since_filter(None if args.since == "all" else args.since)
+    counts = since_filter({"all": None, None: SAME_CLOTH_SINCE}.get(args.since, args.since))
     start, rev = time.perf_counter(), _revision()
     for k in range(args.first, args.clips):
         if args.until is not None and time.perf_counter() - start > args.until:
@@ -198,7 +205,7 @@ def main(argv=None) -> dict:
         with open(args.log, "a") as fh:  # one line, one write: appends from two processes do not interleave
             fh.write(json.dumps(row) + "\n")
     rows = counted_rows(args.log, counts)
-    return {**summary(rows), "since": args.since, "rows_not_counted": len(read_log(args.log)) - len(rows)}
+    return {**summary(rows), "since": args.since or SAME_CLOTH_SINCE, "rows_not_counted": len(read_log(args.log)) - len(rows)}
 
 
 if __name__ == "__main__":
