@@ -422,6 +422,27 @@ def test_a_carried_particle_goes_where_a_rigid_motion_of_the_cloth_round_it_take
     assert out is q and np.abs(q - moved).max() < 1e-12
 
 
+def test_a_carried_particle_with_no_free_cloth_near_it_is_held():
+    """A 5 x 5 block of slight particles in a square grid: its centre has no free particle
+    within two edges, so a rigid fit has nothing to follow (it divided by zero, and a t-shirt's
+    simulation went non-finite at its first step); ``_beside_free`` says which particles have
+    one, as graph distances (scipy) count them."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import shortest_path
+
+    from synmitsuba.cloth.simulate import _beside_free
+    q0, faces = _square(11)
+    grid = np.arange(len(q0)).reshape(11, 11)
+    carried = np.zeros(len(q0), bool)
+    carried[grid[3:8, 3:8].ravel()] = True
+    pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    hops = shortest_path(coo_matrix((np.ones(len(pairs)), tuple(pairs.T)), shape=(len(q0),) * 2), directed=False,
+                         unweighted=True)
+    want = (hops[:, ~carried] <= 2).any(axis=1)
+    got = _beside_free(faces, carried, len(q0))
+    assert np.array_equal(got, want) and not got[grid[5, 5]] and got[carried].sum() == 24
+
+
 def test_a_carried_corner_swings_with_its_cloth_where_a_held_one_stays_behind():
     """The hanging square's top row carried sideways at 1.5 m/s: its bottom corner, carried,
     keeps its edges to within 1 cm of rest while the cloth swings; held, it stayed where it

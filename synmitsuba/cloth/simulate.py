@@ -190,6 +190,8 @@ def simulated_garments(human) -> list[_Garment]:
         cloth = _without_fins(_proper(index[faces]))
         held = kind.held(part.rest[rows], human.regions)
         carried = slight(part.rest[rows], cloth) & ~held
+        lonely = carried & ~_beside_free(cloth, carried, len(rows))
+        held, carried = held | lonely, carried & ~lonely
         fabric = FABRICS[fabric_of(kind, mesh.params)]
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
@@ -246,6 +248,17 @@ def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
     area = np.zeros(len(q))
     np.add.at(area, faces.ravel(), np.repeat(triangle_areas(q[faces]), 3))
     return area < SLIGHT * np.median(area[area > 0])
+
+
+def _beside_free(faces: np.ndarray, carried: np.ndarray, n: int) -> np.ndarray:
+    """(P,) bool: particles within two edges of one that is not carried: a carried particle
+    is placed by a fit to those (``_Carry``), and one with none has nothing to follow."""
+    from scipy.sparse import coo_matrix
+    pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    near = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)).tocsr()
+    near = near + near.T
+    free = (~carried).astype(float)
+    return (near @ free + near @ (near @ free)) > 0
 
 
 def _with_band(g: _Garment, q: np.ndarray) -> np.ndarray:
