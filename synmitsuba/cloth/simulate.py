@@ -250,15 +250,18 @@ def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return area < SLIGHT * np.median(area[area > 0])
 
 
+def _within_two_edges(faces: np.ndarray, n: int):
+    """(n, n) sparse matrix, non-zero where two of ``n`` particles are within two edges."""
+    from scipy.sparse import coo_matrix
+    pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    near = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    return ((near + near.T) + (near + near.T) @ (near + near.T)).tocsr()
+
+
 def _beside_free(faces: np.ndarray, carried: np.ndarray, n: int) -> np.ndarray:
     """(P,) bool: particles within two edges of one that is not carried: a carried particle
     is placed by a fit to those (``_Carry``), and one with none has nothing to follow."""
-    from scipy.sparse import coo_matrix
-    pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    near = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)).tocsr()
-    near = near + near.T
-    free = (~carried).astype(float)
-    return (near @ free + near @ (near @ free)) > 0
+    return (_within_two_edges(faces, n) @ (~carried).astype(float)) > 0
 
 
 def _with_band(g: _Garment, q: np.ndarray) -> np.ndarray:
@@ -603,14 +606,11 @@ class _Carry:
 
     @classmethod
     def of(cls, pieces: list[ClothPiece], q: np.ndarray) -> _Carry:
-        from scipy.sparse import coo_matrix
         carried, faces = _carried(pieces), _all_faces(pieces)[0]
         if not carried.any():  # most pieces: no neighbourhoods to build
             none = np.zeros(0, np.int64)
             return cls(none, none, none, np.asarray(q, np.float64))
-        pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-        near = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(q), len(q)))
-        near = ((near + near.T) + (near + near.T) @ (near + near.T)).tocsr()  # within two edges
+        near = _within_two_edges(faces, len(q))
         index = np.flatnonzero(carried)
         rows = [np.setdiff1d(near[i].indices, np.flatnonzero(carried)) for i in index]
         owner = np.repeat(np.arange(len(index)), [len(r) for r in rows])
