@@ -20,6 +20,7 @@ from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSIT
                                       body_regions, build_garment, footwear_lift, heel_pitches, metres_per_uv)
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
+from synmitsuba.body.folds import FOLD_MAP_SIZE, FOLD_STREAM, fold_looseness, fold_relief
 from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
 from synmitsuba.body.hair import (Strands, follow_weights, grow_hair, hair_colour, hair_material,
                                   limit_stretch, off_garments, reach, root_cover, scalp_regions_from_head, strand_melanin)
@@ -31,7 +32,7 @@ from synmitsuba.body.recipe import SubjectRecipe
 from synmitsuba.body.hand_skin import hand_lines
 from synmitsuba.body.skin_detail import face_weights, palm_weights, pore_repeat, translucency_weights
 from synmitsuba.body.textures import (fabric_normal_map, fabric_repeat, garment_material, lab_to_linear_rgb, paint_uv,
-                                      paint_weights, skin_material, uv_surface)
+                                      paint_weights, rasterise_uv, skin_material, uv_surface)
 from synmitsuba.body.topology import split_at_seams, weld
 from synmitsuba.errors import ConfigError
 from synmitsuba.geometry import SmoothNormals, vertex_normals
@@ -169,7 +170,30 @@ class LayeredHuman:
                 self._panel_frame = PanelFrame.of(self.body.vertices, self.regions, self.body.skeleton)
             outer = m.faces[:len(m.faces) - m.hem[0]]  # the hem's turned-in band shares the outer cloth's texels
             coords = pattern_coords(kind.panels, m.vertices, outer, m.uv, self._panel_frame, size)
-        return garment_material(m.params.texture, size, fabric=kind.fabric, metres_per_uv=per_uv, pattern_coords=coords)
+        folds = None if kind.skirted else self._fold_heights(m, size)  # skirts and dresses: simulated, or hanging free
+        return garment_material(m.params.texture, size, fabric=kind.fabric, metres_per_uv=per_uv, pattern_coords=coords,
+                                folds=folds)
+
+    def _fold_heights(self, m: GarmentMesh, size: int) -> np.ndarray:
+        """The garment's fold relief (``body.folds``) in metres over its atlas, each texel at its
+        rest position (computed at most ``FOLD_MAP_SIZE`` texels across, then scaled up: folds are
+        centimetres wide); texels no face covers take their nearest covered one's."""
+        from scipy.ndimage import distance_transform_edt, zoom
+        if size > FOLD_MAP_SIZE:
+            return zoom(self._fold_heights(m, FOLD_MAP_SIZE), size / FOLD_MAP_SIZE, order=1, mode="nearest", grid_mode=True)
+        outer = m.faces[:len(m.faces) - m.hem[0]]
+        rows, cols, f, w = rasterise_uv(m.uv, outer, size)
+        points = np.einsum("nk,nkd->nd", w, m.vertices[outer[f]])
+        keypoints = self.body.keypoint_weights @ self.body.vertices
+        rng = np.random.default_rng([m.params.texture.seed, FOLD_STREAM])
+        out = np.zeros((size, size))
+        covered = np.zeros((size, size), bool)
+        out[rows, cols] = fold_relief(points, keypoints, rng, looseness=fold_looseness(m.params.ease))
+        covered[rows, cols] = True
+        if covered.any() and not covered.all():
+            r, c = distance_transform_edt(~covered, return_distances=False, return_indices=True)
+            out = out[r, c]
+        return out
 
     def _build_head_and_hair(self) -> None:
         body, sk = self.body, self.body.skeleton

@@ -325,21 +325,32 @@ def fabric_repeat(fabric: str, metres_per_uv) -> tuple:
     return tuple(max(1.0, round(m / FABRIC_TILE_M[fabric])) for m in metres_per_uv)
 
 
+GARMENT_BUMP_SCALE = 0.002  # metres of relief per unit of a garment's bump map
+
+
 def garment_material(p: GarmentTextureParams, size: int = 256, roughness: float = 0.8, fabric: str = "none",
-                     metres_per_uv=(1.0, 1.0), pattern_coords: np.ndarray | None = None):
+                     metres_per_uv=(1.0, 1.0), pattern_coords: np.ndarray | None = None,
+                     folds: np.ndarray | None = None):
     """The garment's material: albedo and pattern bump at ``size`` (the pattern over
     ``pattern_coords``, its panels, when given), and where its fabric (``p.weave``, or
     ``fabric`` for auto) has one, a thread-scale normal map tiled over the uv square as often as
-    ``metres_per_uv`` (metres of cloth per unit u and v) holds tiles."""
+    ``metres_per_uv`` (metres of cloth per unit u and v) holds tiles. ``folds`` (size, size),
+    metres (``body.folds``), joins the bump and darkens the albedo in its creases."""
+    from synmitsuba.body.folds import crease_shade
     from synmitsuba.scene.materials import Material
     albedo, height = render_garment_texture(p, size, pattern_coords)
+    bump, shade = (height if p.bump != "none" else None), None
+    if folds is not None:
+        shade = crease_shade(folds).astype(np.float32)
+        albedo = albedo * shade[..., None]
+        bump = (folds / GARMENT_BUMP_SCALE + (height if bump is not None else 0.0)).astype(np.float32)
     weave = fabric if p.weave == "auto" else p.weave
     normal, repeat = None, (1.0, 1.0)
     if weave != "none":
         normal, repeat = fabric_normal_map(weave), fabric_repeat(weave, metres_per_uv)
-    return Material(texture=albedo, bump=height if p.bump != "none" else None, bump_scale=0.002,
+    return Material(texture=albedo, bump=bump, bump_scale=GARMENT_BUMP_SCALE,
                     kind="principled", roughness=roughness, specular=0.3, normal_map=normal,
-                    normal_map_repeat=repeat, pattern_coords=pattern_coords)
+                    normal_map_repeat=repeat, pattern_coords=pattern_coords, texture_shade=shade)
 
 
 # -- skin ------------------------------------------------------------------------------

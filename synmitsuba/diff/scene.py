@@ -92,7 +92,8 @@ class DiffScene:
         (``GarmentTextureParams``) written in drjit, its pattern over the mesh material's
         ``pattern_coords`` (a garment's panels) where it has them; returns the variable names it adds."""
         key = self.texture_key(mesh)
-        proc = ProceduralTexture(texture, self.params[key].shape[0], self.scene.meshes[mesh].material.pattern_coords)
+        material = self.scene.meshes[mesh].material
+        proc = ProceduralTexture(texture, self.params[key].shape[0], material.pattern_coords, material.texture_shade)
         self._textures[mesh] = (key, proc)
         return [self._add(f"{mesh}.{k}", VARIABLES[k], v) for k, v in proc.initial().items()]
 

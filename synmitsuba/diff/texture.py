@@ -81,15 +81,21 @@ def _band(t, width, e):
 class ProceduralTexture:
     """The garment texture of ``params`` as a drjit function of its ``VARIABLES``, evaluated on
     the ``size`` x ``size`` texel centres of the bitmap it replaces (row 0 is v = 1), its
-    pattern over ``coords`` (the garment's panels: its material's ``pattern_coords``) when given."""
+    pattern over ``coords`` (the garment's panels: its material's ``pattern_coords``) when given,
+    its albedo times ``shade`` (its material's ``texture_shade``: the folds' creases) when given."""
 
-    def __init__(self, params: GarmentTextureParams, size: int, coords: np.ndarray | None = None):
+    def __init__(self, params: GarmentTextureParams, size: int, coords: np.ndarray | None = None,
+                 shade: np.ndarray | None = None):
         if not isinstance(params, GarmentTextureParams):
             raise ConfigError("texture", type(params).__name__, "give a GarmentTextureParams (a garment's .texture)")
         if coords is not None and np.shape(coords) != (size, size, 2):
             raise ConfigError("coords", f"shape {np.shape(coords)}", f"give ({size}, {size}, 2) pattern coordinates "
                               "(the material's pattern_coords) or None")
+        if shade is not None and np.shape(shade) != (size, size):
+            raise ConfigError("shade", f"shape {np.shape(shade)}", f"give ({size}, {size}) albedo factors "
+                              "(the material's texture_shade) or None")
         self.params, self.size = params, int(size)
+        self._shade = None if shade is None else aligned_floats(np.repeat(np.asarray(shade)[..., None], 3, -1))
         v, u = (np.mgrid[:size, :size] + 0.5) / size
         v = 1 - v
         self._u, self._v = aligned_floats(u), aligned_floats(v)  # each at one alignment: one kernel at any address
@@ -127,7 +133,10 @@ class ProceduralTexture:
         img = values["base_rgb"] * (1.0 - m) + values["pattern_rgb"] * m
         d = dr.clip(self._decal(values), 0.0, 1.0) * values["decal_alpha"]
         img = img * (1.0 - d) + values["decal_rgb"] * d
-        return mi.TensorXf(dr.ravel(img), shape=(self.size, self.size, 3))  # type: ignore[call-overload]
+        flat = dr.ravel(img)
+        if self._shade is not None:  # the folds' creases, as body.textures.garment_material darkens them
+            flat = flat * self._shade
+        return mi.TensorXf(flat, shape=(self.size, self.size, 3))  # type: ignore[call-overload]
 
     def _pattern(self, values):
         import drjit as dr

@@ -86,6 +86,8 @@ class Material:
     name: str = ""
     pattern_coords: np.ndarray | None = None  # (H, W, 2): where a garment's pattern was drawn per texel
     # (body.panels; not rendered: diff.ProceduralTexture redraws the texture over the same coordinates)
+    texture_shade: np.ndarray | None = None  # (H, W): what a garment's pattern was multiplied by for ``texture``
+    # (its folds' creases, body.folds; not rendered: diff.ProceduralTexture shades its texture the same)
 
     def __post_init__(self):
         self.base_color = _rgb("material.base_color", self.base_color)

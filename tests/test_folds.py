@@ -1,0 +1,116 @@
+"""Fold relief on skinned garments (body.folds): each zone's folds checked against the zone's
+own geometry, and a built subject's garments carrying it in their bump and albedo."""
+import numpy as np
+import pytest
+
+from synmitsuba.body.folds import FOLD_ZONES, REACHES, FoldZone, crease_shade, fold_relief
+
+ELBOW = FoldZone((0,), (1,), 0.0, 0.06, 0.085, 0.024, 0.034, (0.0, 0.0, 1.0))
+
+
+def _keypoints():
+    kp = np.zeros((2, 3))
+    kp[1] = (0.0, -0.3, 0.0)  # the zone's axis runs down y from the origin
+    return kp
+
+
+def _zone_only(points, zone=ELBOW, seed=3):
+    """The zone's part of the relief: the undulation is drawn first, so the same seed without
+    the zone gives the same undulation."""
+    kp = _keypoints()
+    return (fold_relief(points, kp, np.random.default_rng(seed), zones={"z": zone})
+            - fold_relief(points, kp, np.random.default_rng(seed), zones={}))
+
+
+def _line(angle: float, radius: float = 0.05, n: int = 40001, half: float = 0.4):
+    """Points along the axis at ``radius`` from it, ``angle`` from +x towards +z."""
+    y = np.linspace(-half, half, n)
+    return np.stack([np.full(n, radius * np.cos(angle)), y, np.full(n, radius * np.sin(angle))], 1), y
+
+
+def test_a_zones_folds_lie_within_its_reach_and_radius_and_depth():
+    pts, y = _line(np.pi / 2)  # on the gather side
+    h = _zone_only(pts)
+    assert h.max() <= ELBOW.depth and h.min() >= -2 / np.pi * ELBOW.depth  # crest to crease at most its depth
+    assert h.max() - h.min() > 0.5 * ELBOW.depth  # folds there at all
+    assert np.all(h[np.abs(y) >= REACHES * ELBOW.reach] == 0)
+    far, _ = _line(np.pi / 2, radius=ELBOW.radius + 0.001)
+    assert np.all(_zone_only(far) == 0)
+
+
+def test_folds_are_spaced_about_a_wavelength_and_join_without_steps():
+    """Creases (the relief's sharp minima) along lines near the zone's centre, over seeds and
+    sides: the median gap between neighbours is the wavelength within a quarter (a fold whose arc
+    misses a line leaves a double gap); and the relief is continuous where one fold meets the
+    next (each is zero at the crease between them), its steps never far over its steepest slope."""
+    gaps = []
+    for seed in range(4):
+        for angle in (np.pi / 2, np.pi / 3, 0.0):
+            pts, y = _line(angle)
+            h = _zone_only(pts, seed=seed)
+            step = y[1] - y[0]
+            assert np.abs(np.diff(h)).max() < 3 * np.pi * ELBOW.depth / ELBOW.wavelength * step
+            dh = np.diff(h)
+            minima = np.flatnonzero((dh[:-1] < 0) & (dh[1:] >= 0)) + 1
+            gaps += list(np.diff(y[minima[np.abs(y[minima]) < 1.5 * ELBOW.reach]]))
+    assert len(gaps) > 20 and abs(np.median(gaps) / ELBOW.wavelength - 1) < 0.25, np.round(gaps, 3)
+
+
+def test_folds_crowd_on_the_gather_side():
+    front, _ = _line(np.pi / 2)    # +z: the gather side
+    back, _ = _line(-np.pi / 2)
+    rms = [np.sqrt(np.mean(_zone_only(p, seed=s) ** 2)) for s in range(6) for p in (front, back)]
+    assert np.mean(rms[0::2]) > 1.5 * np.mean(rms[1::2])
+
+
+def test_the_relief_is_deterministic_and_every_zone_names_real_keypoints():
+    pts = np.random.default_rng(0).uniform(-0.5, 0.5, (500, 3))
+    kp = np.random.default_rng(1).uniform(-0.5, 0.5, (23, 3))
+    a = fold_relief(pts, kp, np.random.default_rng(7))
+    assert np.array_equal(a, fold_relief(pts, kp, np.random.default_rng(7)))
+    assert not np.array_equal(a, fold_relief(pts, kp, np.random.default_rng(8)))
+    assert all(max(z.at + z.toward) < 17 for z in FOLD_ZONES.values())  # COCO-17 body keypoints
+
+
+def test_crease_shade_darkens_only_creases():
+    h = np.array([0.004, 0.0, -0.003, -0.006, -0.02])
+    assert np.allclose(crease_shade(h), [1.0, 1.0, 0.9, 0.8, 0.8])
+
+
+@pytest.fixture(scope="module")
+def folded(sm):
+    recipe = sm.sample_subject(np.random.default_rng(3), {"outfit": ["longsleeve", "skirt"], "jacket": False,
+                                                          "texture_size": 128})
+    return sm.build_subject(recipe)
+
+
+def _bare(h, m, size):
+    """The garment's material as it was before folds: its pattern over its panels, nothing else."""
+    from synmitsuba.body.garments import GARMENTS
+    from synmitsuba.body.panels import PanelFrame, pattern_coords
+    from synmitsuba.body.textures import garment_material
+    kind = GARMENTS[m.params.kind]
+    coords = None
+    if kind.panels is not None:
+        frame = PanelFrame.of(h.body.vertices, h.regions, h.body.skeleton)
+        coords = pattern_coords(kind.panels, m.vertices, m.faces[:len(m.faces) - m.hem[0]], m.uv, frame, size)
+    return garment_material(m.params.texture, size, fabric=kind.fabric, pattern_coords=coords)
+
+
+def test_a_built_sleeve_carries_its_folds_and_a_skirt_none(folded):
+    """The long sleeve's bump is its pattern's plus the fold map over its rest surface, and its
+    albedo the pattern's darkened by ``crease_shade``; the skirt (simulated or hanging free)
+    keeps its pattern's material."""
+    from synmitsuba.body.textures import GARMENT_BUMP_SCALE
+    parts = {p.name: p for p in folded.parts}
+    garments = {g.params.kind: g for g in folded.garments}
+    m = garments["longsleeve"]
+    folds = folded._fold_heights(m, 128)
+    assert np.abs(folds).max() > 0.003  # folds a few millimetres deep somewhere (elbow, cuff, waist)
+    bare = _bare(folded, m, 128)
+    top = parts["longsleeve"].material
+    assert np.allclose(top.bump, folds / GARMENT_BUMP_SCALE + (bare.bump if bare.bump is not None else 0.0), atol=1e-4)
+    assert np.allclose(top.texture, bare.texture * crease_shade(folds)[..., None], atol=1e-6)
+    skirt, bare = parts["skirt"].material, _bare(folded, garments["skirt"], 128)
+    assert np.array_equal(skirt.texture, bare.texture)
+    assert (skirt.bump is None) == (bare.bump is None) and (skirt.bump is None or np.array_equal(skirt.bump, bare.bump))
