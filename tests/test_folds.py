@@ -3,7 +3,7 @@ own geometry, and a built subject's garments carrying it in their bump and albed
 import numpy as np
 import pytest
 
-from synmitsuba.body.folds import FOLD_ZONES, REACHES, FoldZone, crease_shade, fold_relief
+from synmitsuba.body.folds import FOLD_FANS, FOLD_ZONES, REACHES, FoldFan, FoldZone, crease_shade, fold_relief
 
 ELBOW = FoldZone((0,), (1,), 0.0, 0.06, 0.085, 0.024, 0.034, (0.0, 0.0, 1.0))
 
@@ -18,8 +18,8 @@ def _zone_only(points, zone=ELBOW, seed=3):
     """The zone's part of the relief: the undulation is drawn first, so the same seed without
     the zone gives the same undulation."""
     kp = _keypoints()
-    return (fold_relief(points, kp, np.random.default_rng(seed), zones={"z": zone})
-            - fold_relief(points, kp, np.random.default_rng(seed), zones={}))
+    return (fold_relief(points, kp, np.random.default_rng(seed), zones={"z": zone}, fans={})
+            - fold_relief(points, kp, np.random.default_rng(seed), zones={}, fans={}))
 
 
 def _line(angle: float, radius: float = 0.05, n: int = 40001, half: float = 0.4):
@@ -70,6 +70,30 @@ def test_the_relief_is_deterministic_and_every_zone_names_real_keypoints():
     assert np.array_equal(a, fold_relief(pts, kp, np.random.default_rng(7)))
     assert not np.array_equal(a, fold_relief(pts, kp, np.random.default_rng(8)))
     assert all(max(z.at + z.toward) < 17 for z in FOLD_ZONES.values())  # COCO-17 body keypoints
+
+
+def test_a_fans_ridges_radiate_within_its_spread_and_reach():
+    """An armpit's fan at the origin aimed along +x in the frontal plane: on arcs round it the
+    relief rises and falls once per ``spacing`` radians inside the spread (counted crossings of
+    its arc's mean), is zero outside it and near the centre, and is continuous."""
+    kp = np.array([[0.0, 0.0, 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])  # at, down (shift 0), toward
+    fan = FoldFan((0,), (1,), 0.0, (2,), 0.6, 0.24, 0.1, 0.012)
+    phi = np.linspace(-1.2, 1.2, 24001)
+    gaps = []
+    for radius, seed in ((0.06, 2), (0.09, 2), (0.06, 3), (0.09, 4)):
+        pts = np.stack([radius * np.cos(phi), radius * np.sin(phi), np.full(len(phi), 0.05)], 1)
+        h = (fold_relief(pts, kp, np.random.default_rng(seed), zones={}, fans={"f": fan})
+             - fold_relief(pts, kp, np.random.default_rng(seed), zones={}, fans={}))
+        assert np.all(h[np.abs(phi) >= fan.spread] == 0) and np.abs(h).max() <= fan.depth
+        assert np.abs(np.diff(h)).max() < 0.05 * fan.depth  # 1e-4 rad a step: no jumps
+        inside = np.abs(phi) < fan.spread - 0.2
+        minima = np.flatnonzero((np.diff(h)[:-1] < 0) & (np.diff(h)[1:] >= 0)) + 1
+        gaps += list(np.diff(phi[minima[inside[minima]]]))
+    assert len(gaps) >= 6 and abs(np.median(gaps) / fan.spacing - 1) < 0.25, gaps
+    near = np.stack([0.015 * np.cos(phi), 0.015 * np.sin(phi), np.zeros(len(phi))], 1)
+    assert np.all(fold_relief(near, kp, np.random.default_rng(2), zones={}, fans={"f": fan})
+                  == fold_relief(near, kp, np.random.default_rng(2), zones={}, fans={}))
+    assert all(max(f.at + f.down + f.toward) < 17 for f in FOLD_FANS.values())
 
 
 def test_crease_shade_darkens_only_creases():

@@ -41,6 +41,30 @@ FOLD_ZONES: dict[str, FoldZone] = {
     **{f"lap_{s}": FoldZone((h,), (k,), 0.06, 0.05, 0.12, 0.014, 0.032, _FRONT) for s, h, k in (("l", 11, 13), ("r", 12, 14))},
     "waist": FoldZone((11, 12), (5, 6), 0.1, 0.06, 0.3, 0.014, 0.045),
 }
+
+
+@dataclass(frozen=True)
+class FoldFan:
+    """Drag folds radiating from a point where cloth hangs from the body (an armpit): ridges
+    along rays from the mean of the COCO keypoints ``at`` (moved ``shift`` of the way toward
+    ``down``), fanning ``spread`` radians either side of the direction toward ``toward``, one
+    every ``spacing`` radians, ``depth`` metres from crest to crease, fading over ``reach``
+    metres from the point (starting 2 cm out from it)."""
+
+    at: tuple[int, ...]
+    down: tuple[int, ...]
+    shift: float
+    toward: tuple[int, ...]
+    spread: float
+    spacing: float
+    reach: float
+    depth: float
+
+
+FOLD_FANS: dict[str, FoldFan] = {
+    f"armpit_{s}": FoldFan((sh,), (hip,), 0.22, (5, 6), 0.6, 0.24, 0.1, 0.012)
+    for s, sh, hip in (("l", 5, 11), ("r", 6, 12))
+}
 FOLD_MAP_SIZE = 512  # texels across at most: a larger atlas takes the relief scaled up
 FOLD_STREAM = 11  # a garment's relief draws from default_rng([its texture seed, FOLD_STREAM])
 UNDULATION = (0.0015, 0.07, 0.2)  # metres deep, shortest and longest wavelength of the soft relief everywhere
@@ -50,11 +74,13 @@ FOLDS_PER_ZONE = 16  # folds a zone draws its own strength and arc for (more rep
 
 
 def fold_relief(points: np.ndarray, keypoints: np.ndarray, rng: np.random.Generator, looseness: float = 1.0,
-                zones: dict[str, FoldZone] | None = None) -> np.ndarray:
+                zones: dict[str, FoldZone] | None = None, fans: dict[str, FoldFan] | None = None) -> np.ndarray:
     """Height in metres (N,) over rest ``points`` (N, 3) of a garment, ``keypoints`` the body's
-    COCO keypoints at rest: each zone's folds plus the soft undulation, scaled by ``looseness``
-    (1: a garment of ordinary ease; tighter cloth folds less). Deterministic from ``rng``."""
+    COCO keypoints at rest: each zone's and fan's folds plus the soft undulation, scaled by
+    ``looseness`` (1: a garment of ordinary ease; tighter cloth folds less). Deterministic from
+    ``rng`` (the undulation draws first, then the zones, then the fans, each in name order)."""
     zones = FOLD_ZONES if zones is None else zones
+    fans = FOLD_FANS if fans is None else fans
     out = _undulation(points, rng)
     for name in sorted(zones):  # a fixed order: the draws do not depend on the dict's
         z = zones[name]
@@ -65,7 +91,32 @@ def fold_relief(points: np.ndarray, keypoints: np.ndarray, rng: np.random.Genera
         s = d @ axis
         near = np.flatnonzero((np.abs(s) < REACHES * z.reach) & (np.einsum("nd,nd->n", d, d) - s * s < z.radius ** 2))
         out[near] += _zone(z, d[near], s[near], axis, rng)  # the zone's draws are made whether or not any point is near
+    for name in sorted(fans):
+        out += _fan(fans[name], points, keypoints, rng)
     return looseness * out
+
+
+def _fan(f: FoldFan, points: np.ndarray, keypoints: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """One fan's ridges, in the body's frontal plane (front and back alike): each reaches its own
+    length and strength (they meet at the creases between them, where each is zero)."""
+    top, low = keypoints[list(f.at)].mean(0), keypoints[list(f.down)].mean(0)
+    centre = top + f.shift * (low - top)
+    aim = keypoints[list(f.toward)].mean(0) - centre
+    aim[2] = 0.0
+    aim /= max(float(np.linalg.norm(aim)), 1e-9)
+    side = np.cross([0.0, 0.0, 1.0], aim)
+    d = points - centre
+    s, t = d @ aim, d @ side
+    r = np.hypot(s, t)
+    phi = np.arctan2(t, s)
+    x = phi / f.spacing + 0.15 * np.sin(r / 0.03 + rng.uniform(0, 2 * np.pi)) + rng.uniform(0, 1)
+    ridges = FOLDS_PER_ZONE
+    strength, length = rng.uniform(0.3, 1.0, ridges), rng.uniform(0.5, 1.5, ridges)
+    i = np.floor(x).astype(np.int64) % ridges
+    start = np.clip((r - 0.02) / 0.03, 0, 1) * np.clip((f.spread - np.abs(phi)) / 0.2, 0, 1)
+    ridge = start * np.exp(-0.5 * (r / (f.reach * length[i])) ** 2) * strength[i] * np.abs(np.sin(np.pi * x))
+    level = 1 / np.pi * strength.mean() * start * np.exp(-0.5 * (r / f.reach) ** 2)  # about the ridges' mean
+    return f.depth * (ridge - level)
 
 
 def _undulation(points: np.ndarray, rng: np.random.Generator) -> np.ndarray:
