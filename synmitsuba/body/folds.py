@@ -62,8 +62,10 @@ class FoldFan:
 
 
 FOLD_FANS: dict[str, FoldFan] = {
-    f"armpit_{s}": FoldFan((sh,), (hip,), 0.22, (5, 6), 0.6, 0.24, 0.1, 0.012)
-    for s, sh, hip in (("l", 5, 11), ("r", 6, 12))
+    **{f"armpit_{s}": FoldFan((sh,), (hip,), 0.22, (5, 6), 0.6, 0.24, 0.1, 0.012)
+       for s, sh, hip in (("l", 5, 11), ("r", 6, 12))},
+    # a trouser's whiskers: from the crotch up and out over each thigh toward its hip
+    **{f"crotch_{s}": FoldFan((11, 12), (13, 14), 0.12, (hip,), 0.5, 0.2, 0.09, 0.008) for s, hip in (("l", 11), ("r", 12))},
 }
 FOLD_MAP_SIZE = 512  # texels across at most: a larger atlas takes the relief scaled up
 FOLD_STREAM = 11  # a garment's relief draws from default_rng([its texture seed, FOLD_STREAM])
