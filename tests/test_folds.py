@@ -96,6 +96,20 @@ def test_a_fans_ridges_radiate_within_its_spread_and_reach():
     assert all(max(f.at + f.down + f.toward) < 17 for f in FOLD_FANS.values())
 
 
+def test_folds_too_fine_for_the_map_fade_out_instead_of_aliasing():
+    """On a map whose texels are 2 cm (a long sleeve on 128 texels) the elbow's 3.4 cm folds would be under
+    two texels apart: gone; on 5 mm texels (a 512-texel one) they are whole; between, scaled."""
+    pts, _ = _line(np.pi / 2)
+    kp, zone = _keypoints(), {"z": ELBOW}
+
+    def folds(texel):
+        return (fold_relief(pts, kp, np.random.default_rng(3), zones=zone, fans={}, texel=texel)
+                - fold_relief(pts, kp, np.random.default_rng(3), zones={}, fans={}, texel=texel))
+    whole = _zone_only(pts)
+    assert np.array_equal(folds(0.005), whole) and not folds(0.02).any()
+    assert np.allclose(folds(ELBOW.wavelength / 4), 0.5 * whole)  # 4 texels a fold: halfway
+
+
 def test_crease_shade_darkens_only_creases():
     h = np.array([0.004, 0.0, -0.003, -0.006, -0.02])
     assert np.allclose(crease_shade(h), [1.0, 1.0, 0.9, 0.8, 0.8])
@@ -104,7 +118,7 @@ def test_crease_shade_darkens_only_creases():
 @pytest.fixture(scope="module")
 def folded(sm):
     recipe = sm.sample_subject(np.random.default_rng(3), {"outfit": ["longsleeve", "skirt"], "jacket": False,
-                                                          "texture_size": 128})
+                                                          "texture_size": 512})
     return sm.build_subject(recipe)
 
 
@@ -129,12 +143,12 @@ def test_a_built_sleeve_carries_its_folds_and_a_skirt_none(folded):
     parts = {p.name: p for p in folded.parts}
     garments = {g.params.kind: g for g in folded.garments}
     m = garments["longsleeve"]
-    folds = folded._fold_heights(m, 128)
+    folds = folded._fold_heights(m, 512)
     assert np.abs(folds).max() > 0.003  # folds a few millimetres deep somewhere (elbow, cuff, waist)
-    bare = _bare(folded, m, 128)
+    bare = _bare(folded, m, 512)
     top = parts["longsleeve"].material
     assert np.allclose(top.bump, folds / GARMENT_BUMP_SCALE + (bare.bump if bare.bump is not None else 0.0), atol=1e-4)
     assert np.allclose(top.texture, bare.texture * crease_shade(folds)[..., None], atol=1e-6)
-    skirt, bare = parts["skirt"].material, _bare(folded, garments["skirt"], 128)
+    skirt, bare = parts["skirt"].material, _bare(folded, garments["skirt"], 512)
     assert np.array_equal(skirt.texture, bare.texture)
     assert (skirt.bump is None) == (bare.bump is None) and (skirt.bump is None or np.array_equal(skirt.bump, bare.bump))

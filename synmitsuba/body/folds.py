@@ -76,14 +76,17 @@ FOLDS_PER_ZONE = 16  # folds a zone draws its own strength and arc for (more rep
 
 
 def fold_relief(points: np.ndarray, keypoints: np.ndarray, rng: np.random.Generator, looseness: float = 1.0,
-                zones: dict[str, FoldZone] | None = None, fans: dict[str, FoldFan] | None = None) -> np.ndarray:
+                zones: dict[str, FoldZone] | None = None, fans: dict[str, FoldFan] | None = None,
+                texel: float = 0.0) -> np.ndarray:
     """Height in metres (N,) over rest ``points`` (N, 3) of a garment, ``keypoints`` the body's
     COCO keypoints at rest: each zone's and fan's folds plus the soft undulation, scaled by
-    ``looseness`` (1: a garment of ordinary ease; tighter cloth folds less). Deterministic from
-    ``rng`` (the undulation draws first, then the zones, then the fans, each in name order)."""
+    ``looseness`` (1: a garment of ordinary ease; tighter cloth folds less). Folds under 6
+    ``texel``s (metres a texel of the map spans) apart fade out, as a pattern's bump does, rather
+    than alias. Deterministic from ``rng`` (the undulation draws first, then the zones, then the
+    fans, each in name order)."""
     zones = FOLD_ZONES if zones is None else zones
     fans = FOLD_FANS if fans is None else fans
-    out = _undulation(points, rng)
+    out = resolved(UNDULATION[1], texel) * _undulation(points, rng)
     for name in sorted(zones):  # a fixed order: the draws do not depend on the dict's
         z = zones[name]
         a, b = keypoints[list(z.at)].mean(0), keypoints[list(z.toward)].mean(0)
@@ -92,10 +95,18 @@ def fold_relief(points: np.ndarray, keypoints: np.ndarray, rng: np.random.Genera
         d = points - centre
         s = d @ axis
         near = np.flatnonzero((np.abs(s) < REACHES * z.reach) & (np.einsum("nd,nd->n", d, d) - s * s < z.radius ** 2))
-        out[near] += _zone(z, d[near], s[near], axis, rng)  # the zone's draws are made whether or not any point is near
+        fold = _zone(z, d[near], s[near], axis, rng)  # the zone's draws are made whether or not any point is near
+        out[near] += resolved(z.wavelength, texel) * fold
     for name in sorted(fans):
-        out += _fan(fans[name], points, keypoints, rng)
+        f = fans[name]
+        out += resolved(f.spacing * f.reach, texel) * _fan(f, points, keypoints, rng)
     return looseness * out
+
+
+def resolved(period: float, texel: float) -> float:
+    """1 for folds ``period`` metres apart on a map of ``texel``-metre texels, fading to 0 from 6
+    texels a period down to 2 (``textures._height``'s rule for a pattern's bump)."""
+    return float(np.clip((period / texel - 2.0) / 4.0, 0.0, 1.0)) if texel > 0 else 1.0
 
 
 def _fan(f: FoldFan, points: np.ndarray, keypoints: np.ndarray, rng: np.random.Generator) -> np.ndarray:

@@ -188,7 +188,8 @@ class LayeredHuman:
         rng = np.random.default_rng([m.params.texture.seed, FOLD_STREAM])
         out = np.zeros((size, size))
         covered = np.zeros((size, size), bool)
-        out[rows, cols] = fold_relief(points, keypoints, rng, looseness=fold_looseness(m.params.ease))
+        texel = max(metres_per_uv(m.vertices, outer, m.uv)) / size
+        out[rows, cols] = fold_relief(points, keypoints, rng, looseness=fold_looseness(m.params.ease), texel=texel)
         covered[rows, cols] = True
         if covered.any() and not covered.all():
             r, c = distance_transform_edt(~covered, return_distances=False, return_indices=True)
