@@ -1,9 +1,10 @@
 """Fold relief for skinned garments: the creases cloth keeps where it gathers (the inside of an
 elbow, the back of a knee, a cuff or a trouser hem stacked on the wrist or ankle, a top bunched
-over the hips) and the soft undulation of cloth that never lies flat, as a height field in
-metres over the garment's rest surface. A skinned shell is smooth; this relief shades it as
-folded cloth (a bump map and darker creases), without moving its vertices, so labels, layers
-and the cloth stage see the same meshes. Simulated garments fold for themselves and take none."""
+over the hips; drag lines from the armpits, a trouser's whiskers) and the soft undulation of
+cloth that never lies flat, as a height field in metres over the garment's rest surface. A
+skinned shell is smooth; this relief shades it as folded cloth (a bump map and darker creases),
+without moving its vertices, so labels, layers and the cloth stage see the same meshes. Skirts
+and dresses (simulated, folding for themselves, or hanging free) take none."""
 from __future__ import annotations
 
 from dataclasses import dataclass
