@@ -37,9 +37,20 @@ INPUTS = ".device/cloth_inputs.pkl.xz"
 CACHE = ".device/warpcache"  # carried to the device beside INPUTS
 
 
+def _recorded(fn, store: dict):
+    """``fn`` whose answers are rounded to float32 (as both machines replay them) and kept in
+    ``store`` under their argument: the frames and the arms' lead the drape asks for."""
+    def call(x):
+        if x not in store:
+            store[x] = tuple(a.astype(np.float32) for a in fn(x))
+        return tuple(a.astype(np.float64) for a in store[x])
+    return call
+
+
 def pack(args) -> dict:
+    _forward_only(args)
     import synmitsuba as sm
-    from synmitsuba.cloth.simulate import cloth_inputs
+    from synmitsuba.cloth.simulate import _seals, cloth_inputs
     s = sm.ClothSettings()
     clips = []
     for i in range(args.subjects):
@@ -50,12 +61,17 @@ def pack(args) -> dict:
         for motion in args.motions.split(","):
             clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=args.seconds), human.skeleton)
             garments, collider = cloth_inputs(human, clip, s)
-            frames = [tuple(a.astype(np.float32) for a in collider.at(f)) for f in range(clip.n_frames)]
+            frames, lead = {}, {}
+            frames_at, lead_at = _recorded(collider.at, frames), _recorded(collider.lead, lead)
+            for f in range(clip.n_frames):
+                frames_at(f)
             clip_in = {"name": f"subject {i} {garment} {motion}", "pieces": [g.piece for g in garments],
                        "names": [g.name for g in garments], "faces": human.body.faces, "fps": clip.fps,
-                       "frames": frames, "incidence": human._incidence, "around": human._around}
+                       "frames": [frames[f] for f in range(clip.n_frames)], "lead": lead,
+                       "seals": _seals(human, garments), "slippery": collider.slippery,
+                       "incidence": human._incidence, "around": human._around}
             t = time.perf_counter()
-            q = drape_clip(clip_in, s)
+            q = drape_clip(clip_in, s, lead=lead_at)  # records the lead's steps as it goes
             clip_in["cpu_q"], clip_in["cpu_s"] = q.astype(np.float32), time.perf_counter() - t
             clips.append(clip_in)
             print(clip_in["name"], f"{clip_in['cpu_s']:.1f} s on this CPU", file=sys.stderr, flush=True)
@@ -65,8 +81,9 @@ def pack(args) -> dict:
     return {"packed": len(clips), "bytes": os.path.getsize(INPUTS)}
 
 
-def drape_clip(c: dict, s) -> np.ndarray:
-    """The cloth stage's drape of a packed clip under settings ``s``."""
+def drape_clip(c: dict, s, lead=None) -> np.ndarray:
+    """The cloth stage's drape of a packed clip under settings ``s``: the collider of
+    ``cloth_inputs`` (frames, the arms' lead, the waist seals, slippery hands) replayed."""
     from synmitsuba.cloth.simulate import Collider, drape, out_of_body
     human = SimpleNamespace(body=SimpleNamespace(faces=c["faces"]), _incidence=c["incidence"], _around=c["around"])
 
@@ -74,33 +91,50 @@ def drape_clip(c: dict, s) -> np.ndarray:
         body, q = c["frames"][frame]
         return body.astype(np.float64), q.astype(np.float64)
 
-    def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
+    def replay(w: float) -> tuple[np.ndarray, np.ndarray]:
+        body, q = c["lead"][w]
+        return body.astype(np.float64), q.astype(np.float64)
+
+    def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:  # as cloth_inputs' own
+        for seal in c["seals"]:
+            q = seal.apply(body, q)
         return out_of_body(human, body, q, s.particle_radius / 2)
 
-    return drape(c["pieces"], Collider(c["faces"], at, c["fps"], len(c["frames"]), project), s, names=c["names"])
+    collider = Collider(c["faces"], at, c["fps"], len(c["frames"]), project, lead or replay, slippery=c["slippery"])
+    return drape(c["pieces"], collider, s, names=c["names"])
+
+
+# the block sizes Newton 1.8 launches these modules with on CUDA, where they differ from a CPU's or
+# take long to compile (the device's dry run, bench/RESULTS.md 2026-11-27); the rest compile there fast
+CUDA_BLOCK_DIMS = {"soft_face_contacts_False": 128, "soft_edge_contacts_False": 128, "soft_contacts_mesh": 64,
+                   "narrow_phase_primitive_write_contact": 128}
 
 
 def warm(args) -> dict:
-    """Compile, here, the CUDA binary of every Warp module a drape loads (see the module doc)."""
+    """Compile, here, the CUDA binary of every Warp module a drape loads (see the module doc),
+    with the block size a CUDA launch uses where ``CUDA_BLOCK_DIMS`` knows it."""
     import warp as wp
     wp.config.kernel_cache_dir = os.path.abspath(CACHE)
+    _forward_only(args)
     wp.init()
     from warp._src.context import Module
 
     from synmitsuba.cloth import ClothSettings
     load, done, rows = Module.load, set(), []
 
-    def load_and_compile(self, device, *a, **k):
-        out = load(self, device, *a, **k)
-        name = self.get_module_identifier()
-        if name not in done:
-            done.add(name)
+    def load_and_compile(self, device, block_dim=None, *a, **k):
+        out = load(self, device, block_dim, *a, **k)
+        bd = next((b for name, b in CUDA_BLOCK_DIMS.items() if self.name.endswith(name)), self.options["block_dim"])
+        if (self.name, bd, self.get_module_hash(bd)) not in done:
+            done.add((self.name, bd, self.get_module_hash(bd)))
             t = time.perf_counter()
             try:
-                wp.compile_aot_module(self, arch=args.arch, use_ptx=False)
+                self._compile(None, output_arch=args.arch, use_ptx=False,
+                              options=self.resolve_options(wp.config, block_dim=bd))
             except RuntimeError as e:  # a module of generic kernels with no overload yet
-                print(name, "skipped:", e, file=sys.stderr)
-            rows.append({"module": name, "compile_s": round(time.perf_counter() - t, 1)})
+                print(self.name, "skipped:", e, file=sys.stderr)
+            rows.append({"module": self.get_module_identifier(bd), "block_dim": bd,
+                         "compile_s": round(time.perf_counter() - t, 1)})
             print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
         return out
 
@@ -109,11 +143,18 @@ def warm(args) -> dict:
     s = ClothSettings()
     Module.load = load_and_compile
     try:
-        for c in clips:
+        for c in clips[:1]:
             drape_clip(dict(c, frames=c["frames"][:args.frames]), s)
     finally:
         Module.load = load
     return {"warmed": rows, "arch": args.arch, "cache": CACHE}
+
+
+def _forward_only(args) -> None:
+    """Newton's kernels without their backward passes, as the CLI and generation workers make
+    them (``configure_process``); ``--full-kernels``: with them."""
+    from synmitsuba.process import SETTINGS
+    SETTINGS.forward_only_kernels = not args.full_kernels
 
 
 def precompile(clips: list, s, frames: int = 3, workers: int = 16, passthrough=lambda module: False) -> dict:
@@ -178,6 +219,7 @@ def run(args) -> dict:
         wp.config.kernel_cache_dir = os.path.abspath(cache)
         wp.config.cuda_output = "cubin"
 
+    _forward_only(args)
     from synmitsuba.cloth import ClothError, ClothSettings
     with lzma.open(INPUTS, "rb") as f:
         clips = pickle.load(f)
@@ -209,7 +251,7 @@ def run(args) -> dict:
     dev = wp.get_device(args.device)
     done = [r for r in rows if "diverged" not in r]
     return {"bench": "cloth_device", "device": f"{args.device}: {dev.name}", "warp": wp.config.version,
-            "full_contact": s.full_contact, "precompiled": compiled, "clips": rows,
+            "full_contact": s.full_contact, "forward_only": not args.full_kernels, "precompiled": compiled, "clips": rows,
             "seconds_per_frame_median": float(np.median([r["seconds_per_frame"] for r in done])) if done else None,
             "cpu_here_seconds_per_frame_median": float(np.median([r["cpu_here_seconds_per_frame"] for r in done[1:] or done]))
             if done else None}
@@ -230,6 +272,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--workers", type=int, default=16, help="run --precompile: compiling threads")
     ap.add_argument("--vertex-contact", action="store_true",
                     help="run: the body's vertices only (full_contact off; its CUDA modules compile in seconds)")
+    ap.add_argument("--full-kernels", action="store_true", help="Newton's kernels with their backward passes")
     ap.add_argument("--cache", default=None, help="run: Warp's kernel cache (default CACHE when it exists)")
     args = ap.parse_args(argv)
     out = {"pack": pack, "warm": warm, "run": run}[args.what](args)

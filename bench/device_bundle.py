@@ -10,6 +10,13 @@ warp-lang do not fit) and carried as ``.device/subjects.pkl.xz`` by the benches'
     python3 -m zipfile -e .device/site.zip /tmp/site && export PYTHONPATH=/tmp/site:$PWD
 
     python bench/device_bundle.py      # needs network access to PyPI, here
+
+``--cloth`` packs the cloth stage's solver instead (Warp, Newton, trimesh; their tests and
+examples left out) as ``.device/cloth_site.tar.xz.NN``, parts of at most ``--part-mib`` (Warp's
+library alone is 77 MiB compressed): each call carries one part and copies it to the machine's
+/tmp, which lasts while the machine stays warm; the last one unpacks them all:
+
+    cat /tmp/parts/cloth_site.tar.xz.* | tar xJ -C /tmp/site && export PYTHONPATH=/tmp/site:$PWD
 """
 from __future__ import annotations
 
@@ -42,17 +49,65 @@ def keep(name: str) -> bool:
     return not (".dist-info/" in name or "/tests/" in name)
 
 
+CLOTH_WHEELS = ("warp-lang", "newton", "trimesh")  # at the versions installed here
+
+
+def keep_cloth(name: str) -> bool:
+    """Whether a file of the cloth wheels goes into the cloth bundle."""
+    return not any(part in name for part in (".dist-info/", "/tests/", "/examples/", "__pycache__"))
+
+
+def cloth_bundle(tmp: str, out: str, part_mib: int) -> list[str]:
+    """The cloth wheels' kept files as one xz tar (here: ``tmp`` holds the wheels), split into
+    parts of at most ``part_mib``; returns the parts' paths."""
+    import io
+    import tarfile
+    raw = io.BytesIO()
+    with tarfile.open(fileobj=raw, mode="w") as tar:
+        for wheel in sorted(glob.glob(os.path.join(tmp, "*.whl"))):
+            with zipfile.ZipFile(wheel) as src:
+                for info in src.infolist():
+                    if info.is_dir() or not keep_cloth(info.filename):
+                        continue
+                    member = tarfile.TarInfo(info.filename)
+                    data = src.read(info.filename)
+                    member.size, member.mode = len(data), 0o755 if info.filename.endswith(".so") else 0o644
+                    tar.addfile(member, io.BytesIO(data))
+    import lzma
+    packed = lzma.compress(raw.getvalue(), preset=9 | lzma.PRESET_EXTREME)
+    for old in glob.glob(out + ".*"):
+        os.remove(old)
+    size, paths = part_mib * 2 ** 20, []
+    for k in range(0, len(packed), size):
+        paths.append(f"{out}.{k // size:02d}")
+        with open(paths[-1], "wb") as f:
+            f.write(packed[k:k + size])
+    return paths
+
+
 def main(argv=None) -> int:
     import argparse
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--python-version", default="3.12", help="the device's Python (default 3.12)")
-    ap.add_argument("--out", default=".device/site.zip", help="default .device/site.zip")
+    ap.add_argument("--out", default=None, help="default .device/site.zip (--cloth: .device/cloth_site.tar.xz)")
+    ap.add_argument("--cloth", action="store_true", help="the cloth stage's Warp, Newton and trimesh instead")
+    ap.add_argument("--part-mib", type=int, default=40, help="--cloth: largest part (the working tree, 22 MiB, travels too)")
     args = ap.parse_args(argv)
+    args.out = args.out or (".device/cloth_site.tar.xz" if args.cloth else ".device/site.zip")
+    if args.cloth:
+        from importlib.metadata import version
+        wheels = tuple(f"{name}=={version(name)}" for name in CLOTH_WHEELS)
+    else:
+        wheels = WHEELS
     os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "pip", "download", "-q", "--no-deps", "--only-binary=:all:", "--python-version",
-               args.python_version, "--implementation", "cp", "-d", tmp, *sum((["--platform", p] for p in PLATFORMS), []), *WHEELS]
+               args.python_version, "--implementation", "cp", "-d", tmp, *sum((["--platform", p] for p in PLATFORMS), []), *wheels]
         subprocess.run(cmd, check=True)
+        if args.cloth:
+            for path in cloth_bundle(tmp, args.out, args.part_mib):
+                print(f"{path}: {os.path.getsize(path) / 2 ** 20:.1f} MiB")
+            return 0
         out = args.out + ".part"
         with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED, compresslevel=9) as dst:
             for wheel in sorted(glob.glob(os.path.join(tmp, "*.whl"))):
