@@ -1,26 +1,28 @@
 """The cloth stage on a lent GPU (issue 34's CUDA figures): the same drapes on ``cuda`` as here.
 
 The device machine cannot build subjects (anny does not fit what it carries), so ``pack`` (here)
-records, per clip, what the cloth stage's solver reads: the cloth pieces, the body's faces and,
-per frame, the closed posed body and the skinned garments' particles, stored as float32 and
-replayed as such on both machines; it also drapes each clip on this CPU and keeps the result and
-the seconds. ``run`` (on the device, Warp and Newton carried) drapes each clip on ``cuda`` twice
-(the first run compiles Newton's kernels) and prints, as JSON: seconds per simulated frame (settle
-included), the first clip's seconds, the largest distance of a CUDA vertex from the CPU's, and
-whether the two CUDA runs agree bit for bit.
+records, per clip, what the cloth stage's collider gives the solver: the cloth pieces, the body's
+faces and, per frame and per step of the arms' lead, the closed posed body and the skinned
+garments' particles (float32, replayed as such on both machines), the waist seals and the
+slippery hands; it also drapes each clip on this CPU and keeps the result and the seconds.
+``run`` (on the device: Warp, Newton, trimesh and pykdtree carried) drapes each clip twice and
+prints, as JSON: seconds per simulated frame (settle included), the first run's seconds, the
+distances of its vertices from the CPU's and between its two runs, and whether those agree bit
+for bit. Newton's kernels are built forward-only, as the CLI builds them (``--full-kernels``:
+with their backward passes).
 
     python bench/cloth_device.py pack [--subjects 2] [--motions walk,run] [--seconds 1.0]
     python bench/cloth_device.py warm [--arch 90]   # here: Newton's CUDA kernels, compiled ahead
-    python bench/cloth_device.py run [--precompile] [--cache DIR] [--vertex-contact]
-                                               # on the device (PYTHONPATH with warp, newton, trimesh)
+    python bench/cloth_device.py run [--precompile] [--cache DIR] [--vertex-contact] [--device cpu]
+                                               # on the device (PYTHONPATH with the carried packages)
 
-``run --precompile`` is how a lent machine gets through NVRTC: a dry run finds every module a
-drape loads on CUDA (with the device's own launch block sizes, which a CPU cannot reproduce:
-Newton's SDF contact kernels take 128 threads on CUDA, its tiled cloth solve exists there only),
-then 16 threads compile them at once (Newton's full-surface contacts: 468 s on an H200, against
-720 s one after another), then the drapes run. ``--cache`` puts the CUBINs where later calls find
-them. ``warm`` (here) compiles for ``sm_<arch>`` the modules a CPU drape loads; only the
-device-independent ones match the CUDA run's (bench/RESULTS.md).
+``run --precompile`` compiles before it drapes: a dry run finds every module a drape loads on
+CUDA (with the device's own launch block sizes: Newton's SDF contact kernels take 128 threads on
+CUDA, its tiled cloth solve exists there only), then 16 threads compile them at once (forward-
+only: 11 s on an H200; with backward passes the full-surface contacts alone took 468 s). ``warm``
+(here) compiles for ``sm_<arch>`` the modules a CPU drape loads, at the block sizes
+``CUDA_BLOCK_DIMS`` knows a CUDA launch uses; ``--cache`` is where ``run`` finds and leaves
+CUBINs. bench/RESULTS.md (2026-12-04) says how the packages travel and what was measured.
 """
 import argparse
 import json
@@ -104,17 +106,18 @@ def drape_clip(c: dict, s, lead=None) -> np.ndarray:
     return drape(c["pieces"], collider, s, names=c["names"])
 
 
-# the block sizes Newton 1.8 launches these modules with on CUDA, where they differ from a CPU's or
-# take long to compile (the device's dry run, bench/RESULTS.md 2026-11-27); the rest compile there fast
-CUDA_BLOCK_DIMS = {"soft_face_contacts_False": 128, "soft_edge_contacts_False": 128, "soft_contacts_mesh": 64,
-                   "narrow_phase_primitive_write_contact": 128}
+# the block sizes Newton 1.8 launches these modules with on CUDA (a module named by a part of its
+# name), where they differ from its default: the device's dry runs (bench/RESULTS.md 2026-11-27,
+# 2026-12-04); VBD's tiled solve (32) loads on CUDA only, so it is compiled there
+CUDA_BLOCK_DIMS = {"soft_face_contacts_False": (128,), "soft_edge_contacts_False": (128,),
+                   "soft_contacts_mesh": (64, 256), "narrow_phase_primitive_write_contact": (128,)}
 
 
 def warm(args) -> dict:
     """Compile, here, the CUDA binary of every Warp module a drape loads (see the module doc),
     with the block size a CUDA launch uses where ``CUDA_BLOCK_DIMS`` knows it."""
     import warp as wp
-    wp.config.kernel_cache_dir = os.path.abspath(CACHE)
+    wp.config.kernel_cache_dir = os.path.abspath(args.cache or CACHE)
     _forward_only(args)
     wp.init()
     from warp._src.context import Module
@@ -124,8 +127,10 @@ def warm(args) -> dict:
 
     def load_and_compile(self, device, block_dim=None, *a, **k):
         out = load(self, device, block_dim, *a, **k)
-        bd = next((b for name, b in CUDA_BLOCK_DIMS.items() if self.name.endswith(name)), self.options["block_dim"])
-        if (self.name, bd, self.get_module_hash(bd)) not in done:
+        dims = next((b for name, b in CUDA_BLOCK_DIMS.items() if name in self.name), (self.options["block_dim"],))
+        for bd in dims:
+            if (self.name, bd, self.get_module_hash(bd)) in done:
+                continue
             done.add((self.name, bd, self.get_module_hash(bd)))
             t = time.perf_counter()
             try:
@@ -147,7 +152,8 @@ def warm(args) -> dict:
             drape_clip(dict(c, frames=c["frames"][:args.frames]), s)
     finally:
         Module.load = load
-    return {"warmed": rows, "arch": args.arch, "cache": CACHE}
+    return {"warmed": rows, "arch": args.arch, "cache": args.cache or CACHE,
+            "compile_s": round(sum(r["compile_s"] for r in rows), 1)}
 
 
 def _forward_only(args) -> None:
@@ -181,7 +187,7 @@ def precompile(clips: list, s, frames: int = 3, workers: int = 16, passthrough=l
         return None  # Warp's launch returns without running the kernel
 
     t = time.perf_counter()
-    dry = dataclasses.replace(s, max_drift=float("inf"))
+    dry = dataclasses.replace(s, max_drift=1e9)  # no drift stops a dry run (kernels skipped)
     Module.load = record
     try:
         for c in clips:
@@ -246,7 +252,9 @@ def run(args) -> dict:
                      "cpu_here_seconds_per_frame": round(c["cpu_s"] / n, 4),
                      "max_dist_from_cpu_m": round(float(np.linalg.norm(qs[1] - c["cpu_q"], axis=2).max()), 4),
                      "median_dist_from_cpu_m": round(float(np.median(np.linalg.norm(qs[1] - c["cpu_q"], axis=2))), 5),
-                     "runs_identical": bool(np.array_equal(qs[0], qs[1]))})
+                     "runs_identical": bool(np.array_equal(qs[0], qs[1])),
+                     "max_dist_between_runs_m": round(float(np.linalg.norm(qs[1] - qs[0], axis=2).max()), 5),
+                     "median_dist_between_runs_m": round(float(np.median(np.linalg.norm(qs[1] - qs[0], axis=2))), 6)})
         print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
     dev = wp.get_device(args.device)
     done = [r for r in rows if "diverged" not in r]
@@ -273,7 +281,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--vertex-contact", action="store_true",
                     help="run: the body's vertices only (full_contact off; its CUDA modules compile in seconds)")
     ap.add_argument("--full-kernels", action="store_true", help="Newton's kernels with their backward passes")
-    ap.add_argument("--cache", default=None, help="run: Warp's kernel cache (default CACHE when it exists)")
+    ap.add_argument("--cache", default=None, help="warm, run: Warp's kernel cache (default CACHE; run: when it exists)")
     args = ap.parse_args(argv)
     out = {"pack": pack, "warm": warm, "run": run}[args.what](args)
     print(json.dumps(out, indent=1))
