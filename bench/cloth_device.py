@@ -236,6 +236,10 @@ def run(args) -> dict:
     settle = int(round(s.settle_s * clips[0]["fps"]))
     rows = []
     for k, c in enumerate(clips[:args.clips]):
+        if args.frames_only:  # the drape is causal: its first frames are the whole clip's first frames
+            n_full = len(c["frames"]) + settle
+            c = dict(c, frames=c["frames"][:args.frames_only], cpu_q=c["cpu_q"][:args.frames_only],
+                     cpu_s=c["cpu_s"] * (args.frames_only + settle) / n_full)
         times, qs = [], []
         try:
             for _ in range(2):
@@ -281,6 +285,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--vertex-contact", action="store_true",
                     help="run: the body's vertices only (full_contact off; its CUDA modules compile in seconds)")
     ap.add_argument("--full-kernels", action="store_true", help="Newton's kernels with their backward passes")
+    ap.add_argument("--frames-only", type=int, default=None, help="run: the first N frames of each clip")
     ap.add_argument("--cache", default=None, help="warm, run: Warp's kernel cache (default CACHE; run: when it exists)")
     args = ap.parse_args(argv)
     out = {"pack": pack, "warm": warm, "run": run}[args.what](args)
