@@ -36,12 +36,12 @@ DROP_PLUGINS = {"volpath", "volpathmis", "ellipsoids", "ellipsoidsmesh", "sdfgri
 PLATFORMS = ("manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64")
 
 
-def keep(name: str) -> bool:
-    """Whether a file of the wheels goes into the bundle."""
+def keep(name: str, variants: tuple[str, ...] = KEEP_VARIANTS) -> bool:
+    """Whether a file of the wheels goes into the bundle (Mitsuba's ``variants`` only)."""
     base = os.path.basename(name)
     if name.startswith("mitsuba/") and ".cpython-" in base and name.count("/") == 1:
         module = base.split(".cpython-")[0]
-        return module in KEEP_VARIANTS or not module.startswith(("scalar_", "llvm_", "cuda_"))
+        return module in variants or not module.startswith(("scalar_", "llvm_", "cuda_"))
     if name.startswith("mitsuba/plugins/"):
         return base.removesuffix(".so") not in DROP_PLUGINS
     if name.startswith("colour/") and ("/htmlcov/" in name or "/examples/" in name or "/resources/" in name):
@@ -90,6 +90,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--python-version", default="3.12", help="the device's Python (default 3.12)")
     ap.add_argument("--out", default=None, help="default .device/site.zip (--cloth: .device/cloth_site.tar.xz)")
+    ap.add_argument("--variants", default=",".join(KEEP_VARIANTS),
+                    help="Mitsuba's variants to keep (cuda_ad_rgb,scalar_rgb fits one call beside the working tree)")
     ap.add_argument("--cloth", action="store_true", help="the cloth stage's Warp, Newton and trimesh instead")
     ap.add_argument("--part-mib", type=int, default=40, help="--cloth: largest part (the working tree, 22 MiB, travels too)")
     args = ap.parse_args(argv)
@@ -113,7 +115,7 @@ def main(argv=None) -> int:
             for wheel in sorted(glob.glob(os.path.join(tmp, "*.whl"))):
                 with zipfile.ZipFile(wheel) as src:
                     for info in src.infolist():
-                        if keep(info.filename):
+                        if keep(info.filename, tuple(args.variants.split(","))):
                             dst.writestr(info, src.read(info.filename))
         os.replace(out, args.out)
     print(f"{args.out}: {os.path.getsize(args.out) / 2 ** 20:.1f} MiB")
