@@ -11,7 +11,7 @@ warp-lang do not fit) and carried as ``.device/subjects.pkl.xz`` by the benches'
 
     python bench/device_bundle.py      # needs network access to PyPI, here
 
-``--cloth`` packs the cloth stage's solver instead (Warp, Newton, trimesh; their tests and
+``--cloth`` packs the cloth stage's solver instead (Warp, Newton, trimesh, pykdtree; their tests and
 examples left out) as ``.device/cloth_site.tar.xz.NN``, parts of at most ``--part-mib`` (Warp's
 library alone is 77 MiB compressed): each call carries one part and copies it to the machine's
 /tmp, which lasts while the machine stays warm; the last one unpacks them all:
@@ -49,7 +49,8 @@ def keep(name: str, variants: tuple[str, ...] = KEEP_VARIANTS) -> bool:
     return not (".dist-info/" in name or "/tests/" in name)
 
 
-CLOTH_WHEELS = ("warp-lang", "newton", "trimesh")  # at the versions installed here
+CLOTH_WHEELS = ("warp-lang", "newton", "trimesh", "pykdtree")  # at the versions installed here; pykdtree
+# (the closest-point queries of the cloth's projection) is the one built for the device's Python
 
 
 def keep_cloth(name: str) -> bool:
@@ -92,7 +93,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=None, help="default .device/site.zip (--cloth: .device/cloth_site.tar.xz)")
     ap.add_argument("--variants", default=",".join(KEEP_VARIANTS),
                     help="Mitsuba's variants to keep (cuda_ad_rgb,scalar_rgb fits one call beside the working tree)")
-    ap.add_argument("--cloth", action="store_true", help="the cloth stage's Warp, Newton and trimesh instead")
+    ap.add_argument("--cloth", action="store_true", help="the cloth stage's Warp, Newton, trimesh and pykdtree instead")
     ap.add_argument("--part-mib", type=int, default=40, help="--cloth: largest part (the working tree, 22 MiB, travels too)")
     args = ap.parse_args(argv)
     args.out = args.out or (".device/cloth_site.tar.xz" if args.cloth else ".device/site.zip")
