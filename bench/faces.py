@@ -12,6 +12,7 @@ run the same way in a subprocess, the ratio printed beside):
 - subject build seconds (median), and seconds for a 512x512 / 64 spp frame of the same subjects.
 
     python bench/faces.py [--subjects 24] [--res 320] [--spp 64] [--base /path/to/old/checkout] [--sheet faces.png]
+                          [--face eyeWideLeft:0.5,eyeWideRight:0.5]   # ARKit unit weights on every face
 """
 import argparse
 import json
@@ -121,6 +122,20 @@ def _detect(images: list, eyes2d: list) -> dict:
             "scores": [round(float(x), 3) for x in s], "iris_err_iod": [round(float(x), 4) for x in e]}
 
 
+def _face_weights(spec: str | None):
+    """(52,) ARKit unit weights from ``name:weight,...`` (``--face``), or None."""
+    if not spec:
+        return None
+    from synmitsuba.body.expressions import FACE_UNITS
+    w = np.zeros(len(FACE_UNITS))
+    for item in spec.split(","):
+        name, value = item.split(":")
+        if name not in FACE_UNITS:
+            raise SystemExit(f"--face: unknown unit {name!r}; one of {', '.join(FACE_UNITS)}")
+        w[FACE_UNITS.index(name)] = float(value)
+    return w
+
+
 def measure(args) -> dict:
     import synmitsuba as sm
     from synmitsuba.body.recipe import sample_subject
@@ -139,7 +154,7 @@ def measure(args) -> dict:
         rot, root = _posed(human, cam)
         scene = preview_stage() if not args.env else \
             environment_stage(args.env[k % len(args.env)], np.random.default_rng(1000 + k))
-        human.add_to(scene, rot, root, instance=1)
+        human.add_to(scene, rot, root, instance=1, face=_face_weights(args.face))
         centre_backdrop(scene, cam.center)
         sample = sm.render(scene, cam, spp=args.spp, seed=k, denoise="oidn")
         images.append(np.ascontiguousarray(sm.to_srgb8(sample.rgb)))
@@ -167,6 +182,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--sheet", help="write the crops as a contact sheet here")
     ap.add_argument("--env", type=lambda v: v.split(","), default=None,
                     help="environments, comma-separated (subject k in the k-th in turn; default: the preview stage)")
+    ap.add_argument("--face", help="every face wears these ARKit unit weights, e.g. eyeWideLeft:0.5,eyeWideRight:0.5")
     ap.add_argument("--json-only", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.base and args.env:
