@@ -98,6 +98,7 @@ class HeadFrame:
     nose: np.ndarray   # (3,)
     ears: np.ndarray   # (2, 3) left, right
     chin: float = 0.0
+    pupils: np.ndarray | None = None  # (2, 3) the eyeballs' front poles, which glasses centre on (else ``eyes``)
 
 
 def _local(head: HeadFrame):
@@ -106,15 +107,16 @@ def _local(head: HeadFrame):
 
 
 def _glasses(p: AccessoryParams, body, head):
-    """Two rims of the recipe's ``GLASSES_FRAMES`` shape in front of the eyes (anny's eye
-    keypoints), a bridge, end pieces and temples running back from the rims' upper outer corners
+    """Two rims of the recipe's ``GLASSES_FRAMES`` shape in front of the eyes (the pupils, or
+    anny's eye keypoints), a bridge, end pieces and temples running back from the rims' upper outer corners
     past the sides of the head to the ears; the frame's plane is where the rims clear the face by 3.5 mm and the bridge the nose
     by 4 mm: it rests on the face, not in it."""
     import trimesh
     fr = GLASSES_FRAMES[p.frame or "round"]
     R, c = _local(head)
     face = (body.vertices[head.mask] - c) @ R
-    eyes, ears = (head.eyes - c) @ R, (head.ears - c) @ R
+    eyes, ears = (head.eyes if head.pupils is None else head.pupils) - c, (head.ears - c) @ R
+    eyes = eyes @ R
     mid, half = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2
     a = min(fr.half_width * p.scale, half - fr.rim - 0.004)  # a narrow face keeps a bridge
     b, t = fr.half_height * a / fr.half_width, fr.rim  # a narrowed lens keeps its proportions

