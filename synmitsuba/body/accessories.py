@@ -115,8 +115,8 @@ def _glasses(p: AccessoryParams, body, head):
     fr = GLASSES_FRAMES[p.frame or "round"]
     R, c = _local(head)
     face = (body.vertices[head.mask] - c) @ R
-    eyes, ears = (head.eyes if head.pupils is None else head.pupils) - c, (head.ears - c) @ R
-    eyes = eyes @ R
+    eyes = ((head.eyes if head.pupils is None else head.pupils) - c) @ R
+    ears = (head.ears - c) @ R
     mid, half = eyes.mean(0), abs(eyes[0, 0] - eyes[1, 0]) / 2
     a = min(fr.half_width * p.scale, half - fr.rim - 0.004)  # a narrow face keeps a bridge
     b, t = fr.half_height * a / fr.half_width, fr.rim  # a narrowed lens keeps its proportions
