@@ -1,6 +1,7 @@
 """The cloth stage against skinned garments (issue 34's goals), per subject x motion clip.
 
-Each subject wears a skirt or a dress (alternately; with a t-shirt under a skirt), built once
+Each subject wears a skirt or a dress (alternately; with a t-shirt under a skirt), or with
+``--garments tshirt`` (``longsleeve``) a t-shirt (long sleeve) over trousers, built once
 for simulation (``cloth: simulated``: its skirt ``SIMULATED_DENSITY`` times finer each way) and
 once skinned (``cloth: skinned``, today's mesh), and put through each motion; per clip the cloth
 stage simulates the garment (``synmitsuba.simulate_cloth``) and, on the same frames, the skinned
@@ -14,7 +15,7 @@ Printed as JSON, each for the simulated and the skinned garments:
   the closest point on the body's triangles, 2 mm past it, is: a raised thigh in the belly),
   and the deepest (exact distance to the body's triangles), worst frame per clip;
 - garment against garment (a skirt over the t-shirt tucked into it, which ends 3 cm below the
-  waist): the share of the skirt's vertices under the t-shirt's torso (closest point on its
+  waist; a top over the trousers): the share of the skirt's vertices under the t-shirt's torso (closest point on its
   triangles, sign from that triangle's normal, within 3 cm; not where that triangle touches the
   t-shirt's open edges or its hem's fold: below its end nothing is covered) and the deepest,
   worst frame; apart from it, under its sleeves (an arm hanging against the skirt's hips, not a
@@ -80,6 +81,10 @@ def inside(points, body, faces) -> tuple[float, float]:
 
 
 INNER = ("tshirt", "longsleeve")  # worn with a skirt, a top is tucked in: it ends 3 cm below the waist
+# what each measured garment is worn with, and which of that is under it (the garment-against-garment goal)
+OUTFITS = {"skirt": ["tshirt", "skirt"], "dress": ["dress"], "tshirt": ["tshirt", "trousers"],
+           "longsleeve": ["longsleeve", "trousers"]}
+UNDER = {"skirt": INNER, "dress": (), "tshirt": ("trousers",), "longsleeve": ("trousers",)}
 ARMS = ("upperarm", "lowerarm", "hand")
 
 
@@ -210,7 +215,7 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
                      "sleeve_deepest": []} for k in kinds}
     hems: dict = {k: [] for k in kinds}
     inner = {k: next(((p.name, p.faces, edge_faces_of(p.faces, p.rest, fold_of(humans[k], p.name)),
-                       sleeve_faces_of(humans[k], p)) for p in humans[k].parts if p.name in INNER), None)
+                       sleeve_faces_of(humans[k], p)) for p in humans[k].parts if p.name in UNDER[garment]), None)
              for k in ("sim", "skinned")}
     for f in range(clip.n_frames):
         posed = {k: humans[k].pose(*clip.frame(f)) for k in ("sim", "skinned")}
@@ -252,7 +257,9 @@ def main(argv=None) -> dict:
     ap.add_argument("--cold-cache", action="store_true", help="compile Warp's kernels afresh (a temporary cache)")
     ap.add_argument("--first", type=int, default=0, help="the first subject (seed 100 + first): split a run over processes")
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
-    ap.add_argument("--garments", default="skirt,dress", help="only the subjects wearing these (skirt: the layered ones)")
+    ap.add_argument("--garments", default="skirt,dress",
+                    help="skirt and dress: only the subjects wearing these (alternate subjects; skirt: the layered "
+                         "ones); tshirt, longsleeve (over trousers): every subject wears them in turn")
     ap.add_argument("--summarize", nargs="+", help="print the summary of these rows files and stop")
     ap.add_argument("--start-at-rest", action="store_true",
                     help="start the cloth at rest when the clip starts (as before it took its held part's velocity)")
@@ -269,12 +276,13 @@ def main(argv=None) -> dict:
         simulate._start_velocity = lambda pieces, q, *_: np.zeros_like(q, dtype=np.float32)
     rows, first_s = [], None
     for i in range(args.first, args.first + args.subjects):
-        garment = ("skirt", "dress")[i % 2]
-        if garment not in args.garments.split(","):
+        wanted = args.garments.split(",")
+        tops = [g for g in wanted if g not in ("skirt", "dress")]
+        garment = tops[i % len(tops)] if tops else ("skirt", "dress")[i % 2]
+        if garment not in wanted:
             continue
-        outfit = ["tshirt", "skirt"] if garment == "skirt" else ["dress"]
         recipe = sm.sample_subject(np.random.default_rng(100 + i), {
-            "outfit": outfit, "jacket": False, "shoes": True, "cloth": "simulated", "texture_size": 64})
+            "outfit": OUTFITS[garment], "jacket": False, "shoes": True, "cloth": "simulated", "texture_size": 64})
         humans = {"sim": sm.build_subject(recipe), "skinned": sm.build_subject(replace(recipe, cloth="skinned"))}
         surfaces = {k: Surface(h, garment) for k, h in humans.items()}
         for motion in args.motions.split(","):

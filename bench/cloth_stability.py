@@ -7,8 +7,11 @@ later code count: a clip measured on an older cloth stage is run again, and the 
 the counted rows.
 
 Clip ``k`` is drawn from ``numpy.random.default_rng(k)``: subjects are sampled as
-``sample_subject`` draws them (``cloth: simulated``) until one wears a garment the cloth stage
-simulates (a skirt, dress, shift or wrap; the others stay skinned and are not a test of it),
+``sample_subject`` draws them (``cloth: simulated``) until one wears a garment of the set of
+clips (``--set``): ``hanging`` (the default, ``bench/cloth_stability.jsonl``) a skirt, dress,
+shift or wrap; ``tops`` (``bench/cloth_stability_tops.jsonl``) a top with nothing worn over it,
+which the stage simulates since session 90 (the hanging set's clips are the same clips as
+before it: a top worn with a skirt is tucked into it, so skinned),
 then a procedural motion kind is drawn, retargeted to it and simulated for ``--seconds``
 (after the stage's own settling). Logged per clip: what was worn and done, whether the
 simulation finished (or the ``ClothError`` / other exception it raised, with the garment and
@@ -24,7 +27,7 @@ shows here first: rows logged before this was measured lack it), the seconds, an
 (``rev``: rows logged before it was recorded lack it).
 Prints a JSON summary of the counted rows (clips over half a metre in either: worth a look).
 
-    python bench/cloth_stability.py [--clips 1000] [--seconds 1.0] [--log bench/cloth_stability.jsonl]
+    python bench/cloth_stability.py [--set hanging | tops] [--clips 1000] [--seconds 1.0] [--log FILE]
                                     [--until SECONDS]   # stop starting clips after this long
                                     [--from K]          # start at clip K (skipping clips logged)
                                     [--since REV | all] # count rows from REV's code on (default: SAME_CLOTH_SINCE)
@@ -34,6 +37,8 @@ import json
 import os
 import subprocess
 import time
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -44,13 +49,42 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 # The commits since changed speed and labels, not the cloth (bench/RESULTS.md, session 85). Clips logged on older
 # code run again. A commit that changes what the stage computes for a kind moves its entry to itself.
 SAME_CLOTH_SINCE = {"skirt": "ed120b5", "dress": "4dcabac", "shift": "4dcabac", "wrap": "4dcabac"}
+# Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated from
+# TOPS_SINCE on: a set of clips of their own (``--set tops``), logged apart.
+TOPS_SINCE = "HEAD"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
-def draw_clip(k: int, seconds: float):
-    """Clip ``k``'s subject (built) and retargeted motion, and what was drawn."""
+def hanging(recipe) -> list[str]:
+    """The skirts and dresses a recipe wears (kind/cut): what the first set of clips tests."""
+    return [g.kind + (f"/{g.cut}" if g.cut else "") for g in recipe.garments if g.kind in SAME_CLOTH_SINCE]
+
+
+def tops(recipe) -> list[str]:
+    """The tops a recipe wears that the cloth stage simulates (nothing worn over them)."""
+    from synmitsuba.cloth.kinds import CLOTH_KINDS, worn_over
+    worn = [g.kind for g in recipe.garments]
+    return [w for w in worn if w in CLOTH_KINDS and CLOTH_KINDS[w].outermost and not worn_over(w, worn)]
+
+
+@dataclass(frozen=True)
+class ClipSet:
+    """A set of clips: the garments a drawn subject must wear (``wears``: a recipe's, listed; none:
+    draw again), where its rows are logged and from which commits they count."""
+
+    wears: Callable
+    log: str
+    since: dict | str
+
+
+SETS = {"hanging": ClipSet(hanging, os.path.join(HERE, "cloth_stability.jsonl"), SAME_CLOTH_SINCE),
+        "tops": ClipSet(tops, os.path.join(HERE, "cloth_stability_tops.jsonl"), TOPS_SINCE)}
+
+
+def draw_clip(k: int, seconds: float, wears=hanging):
+    """Clip ``k``'s subject (built) and retargeted motion, and what was drawn: subjects are drawn
+    until one ``wears`` a garment of the set."""
     import synmitsuba as sm
-    from synmitsuba.cloth.kinds import CLOTH_KINDS
     from synmitsuba.motion.procedural import KINDS
     rng = np.random.default_rng(k)
     draws = 0
@@ -61,20 +95,20 @@ def draw_clip(k: int, seconds: float):
         # out bit for bit the same and a shift by up to 7 mm apart, from 24 vertices on the back's
         # mid-line at frame 0, where the body's halves tie for closest points: bench/RESULTS.md, session 89)
         recipe = sm.sample_subject(rng, {"cloth": "simulated", "texture_size": 64, "face_shape": False})
-        if any(g.kind in CLOTH_KINDS for g in recipe.garments):
+        worn = wears(recipe)
+        if worn:
             break
     kind = str(rng.choice(KINDS))
     human = sm.build_subject(recipe)
     clip = sm.retarget(sm.procedural_motion(kind, rng, seconds=seconds), human.skeleton)
-    worn = [g.kind + (f"/{g.cut}" if g.cut else "") for g in recipe.garments if g.kind in CLOTH_KINDS]
     return human, clip, {"clip": k, "subjects_drawn": draws, "garments": worn, "motion": kind,
                          "frames": int(clip.n_frames)}
 
 
-def run_clip(k: int, seconds: float) -> dict:
+def run_clip(k: int, seconds: float, wears=hanging) -> dict:
     """Simulate clip ``k`` and measure it (see the module's docstring)."""
     import synmitsuba as sm
-    human, clip, row = draw_clip(k, seconds)
+    human, clip, row = draw_clip(k, seconds, wears)
     t = time.perf_counter()
     try:
         track = sm.simulate_cloth(human, clip)
@@ -189,7 +223,9 @@ def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--clips", type=int, default=1000)
     ap.add_argument("--seconds", type=float, default=1.0)
-    ap.add_argument("--log", default=os.path.join(HERE, "cloth_stability.jsonl"))
+    ap.add_argument("--set", default="hanging", choices=sorted(SETS),
+                    help="hanging: subjects in skirts and dresses; tops: in tops with nothing over them")
+    ap.add_argument("--log", default=None, help="default: the set's own log in bench/")
     ap.add_argument("--until", type=float, default=None, help="start no clip after this many seconds")
     ap.add_argument("--from", dest="first", type=int, default=0,
                     help="first clip to run; clips already in the log are skipped (two processes sharing one log "
@@ -198,18 +234,20 @@ def main(argv=None) -> dict:
                     help="count only rows logged on this commit or later ones; clips logged on older code run again "
                          "(default: SAME_CLOTH_SINCE, per garment kind; 'all' counts every row)")
     args = ap.parse_args(argv)
-    counts = since_filter({"all": None, None: SAME_CLOTH_SINCE}.get(args.since, args.since))
+    clips = SETS[args.set]
+    args.log = args.log or clips.log
+    counts = since_filter({"all": None, None: clips.since}.get(args.since, args.since))
     start, rev = time.perf_counter(), _revision()
     for k in range(args.first, args.clips):
         if args.until is not None and time.perf_counter() - start > args.until:
             break
         if k in {r["clip"] for r in read_log(args.log) if counts(r)}:  # re-read: another process may share the log
             continue
-        row = {**run_clip(k, args.seconds), "rev": rev}
+        row = {**run_clip(k, args.seconds, clips.wears), "rev": rev}
         with open(args.log, "a") as fh:  # one line, one write: appends from two processes do not interleave
             fh.write(json.dumps(row) + "\n")
     rows = counted_rows(args.log, counts)
-    return {**summary(rows), "since": args.since or SAME_CLOTH_SINCE, "rows_not_counted": len(read_log(args.log)) - len(rows)}
+    return {**summary(rows), "set": args.set, "since": args.since or clips.since, "rows_not_counted": len(read_log(args.log)) - len(rows)}
 
 
 if __name__ == "__main__":

@@ -45,7 +45,7 @@ class SubjectRecipe(Params):
                             doc="MakeHuman face modifiers (body.face_shape): name -> -1..1; empty: anny's own face")
     texture_size: int = spec(1024, Choice(TEXTURE_SIZES), doc="garment texture side (the skin's is twice, at most "
                              "1024): 1024 keeps patterns sharp in a 512-px head crop; 256 builds faster, 60 MB less")
-    cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts and dresses hang and swing, "
+    cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts, dresses and outer tops hang and swing, "
                       "simulated over each clip (synmitsuba.cloth)")
 
     def __post_init__(self):
@@ -95,7 +95,7 @@ class SubjectConfig(Params):
                            doc="ages drawn from (adults by default; below 18 anny's calibration shapes children)")
     face_shape: bool = spec(True, Flag(), doc="draw a face of its own (body.face_shape); false: anny's face for the "
                             "phenotypes, as before 2026-12-04")
-    cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts and dresses hang and swing, "
+    cloth: str = spec("skinned", Choice(CLOTH_MODES), doc="skinned, or simulated: skirts, dresses and outer tops hang and swing, "
                       "simulated over each clip (synmitsuba.cloth)")
 
 

@@ -1,15 +1,15 @@
 """Which garment kinds the cloth stage simulates, of what fabric, and which of their vertices
-it holds to the skinned garment (a waistband, a bodice): those move with the body, the rest
-hangs from them. A garment kind not listed here stays skinned even under ``cloth: simulated``
-(tops and trousers follow the body closely; see issue 34's note)."""
+it holds to the skinned garment (a waistband, a bodice, a top's yoke): those move with the body,
+the rest hangs from them. A garment kind not listed here stays skinned even under ``cloth:
+simulated`` (trousers, shorts and jackets: bench/RESULTS.md, session 90)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Iterable
 
 import numpy as np
 
-from synmitsuba.body.garments import SKIRT_CUTS, TUCK, BodyRegions, GarmentParams
+from synmitsuba.body.garments import GARMENTS, SKIRT_CUTS, TUCK, BodyRegions, GarmentParams
 
 
 @dataclass(frozen=True)
@@ -17,6 +17,21 @@ class ClothKind:
     fabric: str                # a name in ``fabrics.FABRICS``
     held: Callable[[np.ndarray, BodyRegions], np.ndarray]  # (rest vertices, body regions) -> (V,) bool
     sealed: bool = False       # its held band closes it round the body: nothing inside rises past it (``seal``)
+    # simulated only when nothing is worn over it (a top under a jacket, or tucked into a skirt, stays
+    # skinned: a free hem would pass through the skinned garment over it)
+    outermost: bool = False
+    # its collider holds the skinned garments worn under it as well as the body: against the body alone
+    # a top's hem caught between the buttocks and was thrown 0.33 m behind (bench/RESULTS.md, session 86)
+    layered: bool = False
+    cuffs: float = 0.0         # metres of each sleeve's end held to the skinned sleeve (on the wrist)
+    # it bends from flat, as panels sewn flat do, not from its rest shape's curvature: a top's shell is the
+    # body's shape, and a back that had left the seat kept the seat's bulge, standing out behind (session 90)
+    flat: bool = False
+    # its particles with little cloth of their own are carried by a rigid fit of the cloth round them
+    # (``simulate.slight``); not a top's: cut from the body's own mesh, a t-shirt had 180 of them in patches
+    # (armpits, underbust, the back hem's middle) that moved as rigid plates and levered its back hem 0.3 m
+    # out behind in a walk (free, it hung as a shirt does: bench/RESULTS.md, session 90)
+    carry: bool = True
 
 
 def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
@@ -40,6 +55,15 @@ def through(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
     return held
 
 
+def yoke(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
+    """Hold a top from ``band`` metres under the shoulder joints up, within their width (2 cm
+    more): the shoulders, collar and hood; the chest, back and sleeves hang from it."""
+    def held(rest: np.ndarray, regions: BodyRegions) -> np.ndarray:
+        sx, sy = regions.shoulder
+        return (rest[:, 1] >= sy - band) & (np.abs(rest[:, 0] - regions.neck_xz[0]) <= sx + 0.02)
+    return held
+
+
 # One entry per simulated garment kind (a name in body.garments.GARMENTS).
 CLOTH_KINDS: dict[str, ClothKind] = {
     # hangs from its waistband and yoke, held down past the end of a top tucked into it (the cloth
@@ -50,6 +74,10 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
     "shift": ClothKind("woven", above("hip_y", 0.02)),
     "wrap": ClothKind("jersey", above("hip_y", 0.02)),
+    # tops over trousers or shorts (or bare legs), nothing over them: hanging from the shoulders
+    **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, carry=False)
+       for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
+                                   ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04))},
 }
 
 
@@ -57,3 +85,11 @@ def fabric_of(kind: ClothKind, garment: GarmentParams) -> str:
     """The fabric a garment is simulated as: its skirt cut's when the cut names one (pressed
     pleats), else its kind's."""
     return (SKIRT_CUTS[garment.cut].fabric if garment.cut else None) or kind.fabric
+
+
+def worn_over(name: str, worn: Iterable[str]) -> list[str]:
+    """The garment kinds of ``worn`` (not shoes) that go over garment kind ``name``: higher in
+    the dressing order (``GarmentKind.order``: a jacket over a top, a skirt over the top tucked
+    into it)."""
+    order = GARMENTS[name].order
+    return [w for w in worn if GARMENTS[w].order > order and not GARMENTS[w].footwear]

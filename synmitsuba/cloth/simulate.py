@@ -23,13 +23,14 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.garments import hem_sources
+from synmitsuba.body.garments import GARMENTS, hem_sources
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
-from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of
+from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, worn_over
 from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
+from synmitsuba.cloth.web import thigh_web
 from synmitsuba.errors import ConfigError, SynMitsubaError
 from synmitsuba.geometry import rigid_fit, triangle_areas, unique_rows, vertex_normals
 from synmitsuba.schema import POSITIVE, Check, Flag, Nested, Number, check_fields, optional, spec
@@ -135,6 +136,7 @@ class ClothPiece:
     fabric: Fabric
     carried: np.ndarray | None = None  # (P,) bool
     rest: np.ndarray | None = None     # (P, 3)
+    flat: bool = False  # bends from flat (sewn from flat panels), not from the rest shape's curvature
 
 
 @dataclass
@@ -154,6 +156,14 @@ class Collider:
     slippery: np.ndarray | None = None  # (T,) bool: faces that push the cloth without friction (the hands:
     # with friction a walking hand dragged a pleated skirt's side up to the waist, an edge 13 cm past its
     # rest length, issue 34's stability clip 171); a closed mesh of its own, as the rest is (``_collider_parts``)
+    body_count: int | None = None  # how many of ``faces`` (the first) are the closed body's; None: all. Those after
+    # them: the skinned garments worn under a ``ClothKind.layered`` one (``inner``: open shells, capped where
+    # ``_collider_parts`` closes the collider) and the web between its thighs (``cloth.web``)
+    inner: np.ndarray | None = None  # (T, 3)
+
+    @property
+    def body_faces(self) -> np.ndarray:
+        return self.faces if self.body_count is None else self.faces[:self.body_count]
 
 
 @dataclass
@@ -180,7 +190,7 @@ def simulated_garments(human) -> list[_Garment]:
     out = []
     for k, part in enumerate(human.parts):
         kind = CLOTH_KINDS.get(part.name)
-        if kind is None:
+        if kind is None or (kind.outermost and worn_over(part.name, [m.params.kind for m in human.garments])):
             continue
         mesh = next(m for m in human.garments if m.params.kind == part.name)
         band = hem_sources(mesh)
@@ -188,16 +198,45 @@ def simulated_garments(human) -> list[_Garment]:
         faces = part.faces[:len(part.faces) - mesh.hem[0]]
         rows, index = _particles(part.rest[:main], faces)
         cloth = _without_fins(_proper(index[faces]))
-        held = kind.held(part.rest[rows], human.regions)
-        carried = slight(part.rest[rows], cloth) & ~held
+        held = kind.held(part.rest[rows], human.regions) | _cuffs(human, part.rest[rows], kind.cuffs)
+        carried = slight(part.rest[rows], cloth) & ~held if kind.carry else np.zeros(len(rows), bool)
         lonely = carried & ~_beside_free(cloth, carried, len(rows))
         held, carried = held | lonely, carried & ~lonely
         fabric = FABRICS[fabric_of(kind, mesh.params)]
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
-        piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows])
+        piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows], flat=kind.flat)
         out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth))
     return out
+
+
+def _worn_under(human, name: str) -> list[int]:
+    """The parts (indices) of the garments (not shoes) that the subject wears under garment
+    ``name``: lower in the dressing order."""
+    order, under = GARMENTS[name].order, set()
+    for m in human.garments:
+        kind = GARMENTS[m.params.kind]
+        if kind.order < order and not kind.footwear:
+            under.add(m.params.kind)
+    return [k for k, part in enumerate(human.parts) if part.name in under]
+
+
+def _cuffs(human, rest: np.ndarray, band: float) -> np.ndarray:
+    """(V,) bool: the garment's vertices within ``band`` metres (along the arm) of each sleeve's
+    end, by the arm coordinate of their nearest body vertex (``BodyRegions.arm_s``); none for 0."""
+    held = np.zeros(len(rest), bool)
+    if band <= 0:
+        return held
+    from scipy.spatial import cKDTree
+    r = human.regions
+    nearest = cKDTree(human.body.vertices).query(rest)[1]
+    arm = np.isin(r.group[nearest], ["upperarm", "lowerarm", "hand"])
+    s = r.arm_s[nearest] * r.arm_length
+    for side in (rest[:, 0] > 0, rest[:, 0] <= 0):
+        sleeve = arm & side
+        if sleeve.any():
+            held |= sleeve & (s >= s[sleeve].max() - band)
+    return held
 
 
 SHORT = 0.002  # metres: a cloth edge shorter than this is collapsed to a point (see ``_particles``)
@@ -294,21 +333,52 @@ def _outside_body(frames: dict, collider: Collider, s: ClothSettings) -> dict:
     """Every garment vertex, held and hem band too, out of the body at each frame by half the
     particle radius (``outside.keep_outside``: the whole body mesh, not the nearest vertices')."""
     from synmitsuba.cloth.outside import keep_outside
+    inner = None if collider.inner is None else _capped(collider.inner, 1.0)
     for f in range(collider.n_frames):
         body = collider.at(f)[0]
         for v in frames.values():
-            v[f] = keep_outside(body, collider.faces, v[f], s.particle_radius / 2)
+            v[f] = keep_outside(body, collider.body_faces, v[f], s.particle_radius / 2)
+            if inner is not None:  # and out of the garments under it, closed (open, a winding number reads nothing)
+                v[f] = keep_outside(inner.place(body), inner.faces, v[f], s.particle_radius / 2)
     return frames
+
+
+@dataclass
+class _Under:
+    """A skinned garment worn under a ``layered`` simulated one, as part of its collider: the
+    layer's vertices ``rows`` (its uv seams welded, its hem band left out: an open shell whose
+    openings ``_collider_parts`` caps) and its faces over them."""
+
+    part: int
+    rows: np.ndarray
+    faces: np.ndarray
+
+    @classmethod
+    def of(cls, human, k: int) -> _Under:
+        part = human.parts[k]
+        mesh = next(m for m in human.garments if m.params.kind == part.name)
+        main = len(part.rest) - len(hem_sources(mesh))
+        rows, index = np.unique(weld(part.rest[:main]), return_inverse=True)
+        faces = index.reshape(-1)[part.faces[:len(part.faces) - mesh.hem[0]]]
+        return cls(k, rows, _proper(faces))
 
 
 def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Collider]:
     """The subject's simulated garments and the moving body they drape over: the closed body
-    and the skinned garments' particles (where held ones go) per frame of ``motion``."""
+    (and, under a ``layered`` kind, the skinned garments worn under it) and the skinned
+    garments' particles (where held ones go) per frame of ``motion``."""
     garments = simulated_garments(human)
+    layered = any(CLOTH_KINDS[g.name].layered for g in garments)
+    under = [_Under.of(human, k) for k in sorted({k for g in garments if CLOTH_KINDS[g.name].layered
+                                                   for k in _worn_under(human, g.name)})]
+    web, web_faces = thigh_web(human.body.vertices, human.regions.group, human.regions.crotch_y) if layered else \
+        (np.zeros(0, np.int64), np.zeros((0, 3), np.int64))
 
     def posed(rotations: np.ndarray, root: np.ndarray, face) -> tuple[np.ndarray, np.ndarray]:
         layers = human.pose(rotations, root, face=face)  # (closed body, skinned garments' particles)
-        return human.closed_body(layers), np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
+        body = human.closed_body(layers)
+        body = np.concatenate([body, *(layers[u.part].vertices[u.rows] for u in under), body[web]])
+        return body, np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
 
     def at(frame: int) -> tuple[np.ndarray, np.ndarray]:
         rotations, root = motion.frame(frame)
@@ -320,15 +390,24 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
         rotations, root = arms_from_rest(motion.frame(0), arms, w)
         return posed(rotations, root, motion.face_at(0))
 
-    seals = _seals(human, garments)
+    seals, nb = _seals(human, garments), len(human.body.vertices)
 
     def project(body: np.ndarray, q: np.ndarray) -> np.ndarray:
         for seal in seals:
-            q = seal.apply(body, q)
-        return out_of_body(human, body, q, s.particle_radius / 2)
+            q = seal.apply(body[:nb], q)
+        return out_of_body(human, body[:nb], q, s.particle_radius / 2)
 
+    starts = np.cumsum([nb] + [len(u.rows) for u in under])
+    inner = np.concatenate([u.faces + a for u, a in zip(under, starts)]) if under else None
+    if not layered:
+        faces, body_count = human.body.faces, None
+    else:
+        faces = np.concatenate([human.body.faces, *([] if inner is None else [inner]), web_faces + starts[-1]])
+        body_count = len(human.body.faces)
     hands = (np.asarray(human.regions.group) == "hand")[human.body.faces].any(axis=1)
-    return garments, Collider(human.body.faces, at, motion.fps, motion.n_frames, project, lead, slippery=hands)
+    hands = np.concatenate([hands, np.zeros(len(faces) - len(hands), bool)])
+    return garments, Collider(faces, at, motion.fps, motion.n_frames, project, lead, slippery=hands,
+                              body_count=body_count, inner=inner)
 
 
 def _seals(human, garments: list[_Garment]) -> list[WaistSeal]:
@@ -391,11 +470,14 @@ def _model(pieces: list[ClothPiece], parts: list[_Part], collider_v: np.ndarray,
     start = 0
     for p in pieces:
         f, pts = p.fabric, _rest_shape(p, q[start:start + len(p.held)]).astype(np.float32)
+        edges = len(builder.edge_rest_angle)
         builder.add_cloth_mesh(pos=wp.vec3(0, 0, 0), rot=wp.quat_identity(), scale=1.0,  # type: ignore[arg-type]
                                vel=wp.vec3(0, 0, 0), vertices=[wp.vec3(*v) for v in pts],
                                indices=p.faces.astype(np.int32).ravel().tolist(), density=f.density, tri_ke=f.stretch,
                                tri_ka=f.shear, tri_kd=f.damping, edge_ke=f.bend, edge_kd=f.bend_damping,
                                particle_radius=s.particle_radius)
+        if p.flat:
+            builder.edge_rest_angle[edges:] = [0.0] * (len(builder.edge_rest_angle) - edges)
         start += len(p.held)
     builder.color(include_bending=True)
     model = builder.finalize()
@@ -430,28 +512,36 @@ class _Part:
         return np.concatenate([v[self.vertices], caps]) if caps else v[self.vertices]
 
 
-def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int) -> list[_Part]:
-    """The collider's faces with friction and its ``slippery`` ones (``mu`` 0), each closed:
+WORN_MU = 0.2  # Newton's shape mu of the garments worn under a simulated one (and the web between the thighs):
+# cloth slides over cloth; at the body's 1, a t-shirt's back was carried up over the seat of the trousers and
+# stood out behind as a stiff bell (bench/RESULTS.md, session 90)
+
+
+def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int, worn: int | None = None) -> list[_Part]:
+    """The collider's faces with friction, those from ``worn`` on (the garments worn under the
+    cloth and the web between the thighs: ``WORN_MU``) and its ``slippery`` ones (``mu`` 0), each closed:
     open where they were cut apart, Newton's mesh contacts took cloth near the cut for inside
     and threw it off (9 of 37 stability clips raised), so each cut loop is capped by a fan
     round a vertex at its middle."""
     if slippery is None or not slippery.any():
         return [_Part(np.arange(n), [], faces, 1.0)]
-    out = []
-    for pick, mu in ((~slippery, 1.0), (slippery, 0.0)):
-        if not pick.any():
-            continue
-        f = faces[pick]
-        directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-        _, first, count = unique_rows(np.sort(directed, axis=1), return_index=True, return_counts=True)
-        cut = directed[first[count == 1]]  # (a, b) as the part's own faces run round it
-        loops = _loops(cut)
-        used, local = np.unique(f, return_inverse=True)  # the cut's vertices are the faces' too
-        f_local = local.reshape(-1, 3)
-        caps = [np.stack([np.searchsorted(used, b), np.searchsorted(used, a), np.full(len(a), len(used) + k)], axis=1)
-                for k, (a, b) in enumerate(cut[np.isin(cut[:, 0], loop)].T for loop in loops)]
-        out.append(_Part(used, loops, np.concatenate([f_local, *caps]), mu))
-    return out
+    rest = np.arange(len(faces)) >= (len(faces) if worn is None else worn)  # the faces after the body's
+    groups = ((~slippery & ~rest, 1.0), (rest, WORN_MU), (slippery, 0.0))
+    return [_capped(faces[pick], mu) for pick, mu in groups if pick.any()]
+
+
+def _capped(f: np.ndarray, mu: float) -> _Part:
+    """The mesh of faces ``f`` closed: each loop of edges that only one face has capped by a fan
+    round a vertex at its middle."""
+    directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    _, first, count = unique_rows(np.sort(directed, axis=1), return_index=True, return_counts=True)
+    cut = directed[first[count == 1]]  # (a, b) as the part's own faces run round it
+    loops = _loops(cut)
+    used, local = np.unique(f, return_inverse=True)  # the cut's vertices are the faces' too
+    f_local = local.reshape(-1, 3)
+    caps = [np.stack([np.searchsorted(used, b), np.searchsorted(used, a), np.full(len(a), len(used) + k)], axis=1)
+            for k, (a, b) in enumerate(cut[np.isin(cut[:, 0], loop)].T for loop in loops)]
+    return _Part(used, loops, np.concatenate([f_local, *caps]), mu)
 
 
 def _loops(edges: np.ndarray) -> list[np.ndarray]:
@@ -470,7 +560,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     import newton
     plan = Schedule.of(collider, s)
     (body0, q0), start = plan.first, plan.start()
-    parts = _collider_parts(collider.faces, collider.slippery, len(start[0]))
+    parts = _collider_parts(collider.faces, collider.slippery, len(start[0]), collider.body_count)
     model, meshes, held = _model(pieces, parts, start[0], start[1], s)
     solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
                                       particle_self_contact_margin=s.self_contact_margin,
