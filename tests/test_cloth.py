@@ -210,6 +210,21 @@ def test_air_drags_a_triangle_along_its_normal_as_a_flat_plate_and_never_past_re
     assert np.allclose(f.sum(0) * 0.1, -0.2 * area * v[0], rtol=1e-9)
 
 
+def test_a_sheltered_triangle_feels_no_drag_moving_inward_and_a_plates_moving_outward():
+    """A top's cloth lies over the body, its faces wound outward: moving inward (its body side
+    leading) it is in the body's wake; moving outward it meets the air as a plate does."""
+    air = Air()
+    q = np.array([[0.0, 0.0, 0.0], [0.3, 0.05, 0.0], [0.1, 0.2, 0.1]])
+    faces, density = np.array([[0, 1, 2]]), np.array([0.2])
+    n = np.cross(q[1] - q[0], q[2] - q[0])
+    out = np.tile(n / np.linalg.norm(n) + [0.3, 0.0, 0.0], (3, 1))
+    for v, sheltered_force in ((out, _plate_force(*q, out[0], air) / 3), (-out, np.zeros(3))):
+        assert np.allclose(drag_forces(q, v, faces, density, 1e-3, air, sheltered=np.array([True])), sheltered_force,
+                           rtol=1e-9, atol=0)
+        assert np.allclose(drag_forces(q, v, faces, density, 1e-3, air, sheltered=np.array([False])),
+                           _plate_force(*q, v[0], air) / 3, rtol=1e-9, atol=0)
+
+
 def test_a_flat_sheet_falls_at_a_plates_terminal_speed_in_air_and_freely_without():
     """A horizontal sheet dropped from 1.5 m for half a second: in air it falls as a plate
     against quadratic drag (``_fallen``: 0.55 m, at 1.28 m/s), in a vacuum 1.23 m, flat all the

@@ -24,10 +24,14 @@ class Air:
 
 
 def drag_forces(q: np.ndarray, v: np.ndarray, faces: np.ndarray, areal_density: np.ndarray, dt: float,
-                air: Air) -> np.ndarray:
+                air: Air, sheltered: np.ndarray | None = None) -> np.ndarray:
     """(P, 3) forces (newtons) of ``air`` on particles at ``q`` moving at ``v`` (both (P, 3)),
     from ``faces`` (T, 3) of cloth weighing ``areal_density`` (T,) kg/m², bounded so that a
-    step of ``dt`` seconds takes at most a triangle's own normal velocity."""
+    step of ``dt`` seconds takes at most a triangle's own normal velocity. ``sheltered`` (T,)
+    bool: triangles of cloth worn close over the body (a top), wound with their normal away from
+    it, that feel no drag while they move inward, the body's side leading: the air between them
+    and the body moves with it (the body's wake). A plate in still air, a t-shirt's back in a run
+    was drawn out behind like a cape."""
     a, b, c = q[faces[:, 0]], q[faces[:, 1]], q[faces[:, 2]]
     cross = np.cross(b - a, c - a)
     twice_area = np.sqrt(np.einsum("ij,ij->i", cross, cross))
@@ -37,6 +41,8 @@ def drag_forces(q: np.ndarray, v: np.ndarray, faces: np.ndarray, areal_density: 
     k = 0.5 * air.density * air.drag  # per area, per speed squared
     rate = np.minimum(k * np.abs(vn) / areal_density, 1.0 / dt)  # 1/s: the bound at rate * dt = 1
     force = -(rate * areal_density * 0.5 * twice_area * vn)[:, None] * n  # mass x normal speed x rate
+    if sheltered is not None:
+        force[sheltered & (vn < 0)] = 0.0
     out = np.zeros_like(q)
     for j in range(3):  # bincount sums in index order: the same bits at any thread count
         for axis in range(3):

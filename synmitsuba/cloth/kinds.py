@@ -32,6 +32,8 @@ class ClothKind:
     # (armpits, underbust, the back hem's middle) that moved as rigid plates and levered its back hem 0.3 m
     # out behind in a walk (free, it hung as a shirt does: bench/RESULTS.md, session 90)
     carry: bool = True
+    # no air drag on its body side: close over the body, the air between is carried with it (``cloth.air``)
+    sheltered: bool = False
 
 
 def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
@@ -75,7 +77,8 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     "shift": ClothKind("woven", above("hip_y", 0.02)),
     "wrap": ClothKind("jersey", above("hip_y", 0.02)),
     # tops over trousers or shorts (or bare legs), nothing over them: hanging from the shoulders
-    **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, carry=False)
+    **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, carry=False,
+                       sheltered=True)
        for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
                                    ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04))},
 }

@@ -137,6 +137,7 @@ class ClothPiece:
     carried: np.ndarray | None = None  # (P,) bool
     rest: np.ndarray | None = None     # (P, 3)
     flat: bool = False  # bends from flat (sewn from flat panels), not from the rest shape's curvature
+    sheltered: bool = False  # worn close over the body, its faces wound outward: no drag on its body side (``air``)
 
 
 @dataclass
@@ -205,7 +206,7 @@ def simulated_garments(human) -> list[_Garment]:
         fabric = FABRICS[fabric_of(kind, mesh.params)]
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
-        piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows], flat=kind.flat)
+        piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows], flat=kind.flat, sheltered=kind.sheltered)
         out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth))
     return out
 
@@ -571,6 +572,8 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     contacts = pipeline.contacts()
     out = np.empty((collider.n_frames, len(q0), 3))
     faces, weight = _all_faces(pieces)
+    shelter = np.concatenate([np.full(len(p.faces), p.sheltered) for p in pieces])
+    lee = shelter if shelter.any() else None
     rest = _rest_shapes(pieces, start[1])
     edges = [_Edges.of(p.faces + k, held, rest) for p, k in zip(pieces, np.cumsum([0] + [len(p.held) for p in pieces]))]
     carry = _Carry.of(pieces, rest)
@@ -596,7 +599,7 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
             pipeline.collide(s0, contacts)
             s0.clear_forces()
             if s.air is not None:
-                _blow(s0, faces, weight, dt, s.air)
+                _blow(s0, faces, weight, dt, s.air, lee)
             solver.step(s0, s1, control, contacts, dt)
             s0, s1 = s1, s0
         q = s0.particle_q.numpy()
@@ -611,9 +614,10 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     return out
 
 
-def _blow(state, faces: np.ndarray, weight: np.ndarray, dt: float, air: Air) -> None:
+def _blow(state, faces: np.ndarray, weight: np.ndarray, dt: float, air: Air, sheltered: np.ndarray | None) -> None:
     """The air's drag on the cloth as the state's external particle forces for the next step."""
-    forces = drag_forces(state.particle_q.numpy().astype(np.float64), state.particle_qd.numpy(), faces, weight, dt, air)
+    forces = drag_forces(state.particle_q.numpy().astype(np.float64), state.particle_qd.numpy(), faces, weight, dt, air,
+                         sheltered)
     state.particle_f.assign(forces.astype(np.float32))
 
 
