@@ -49,9 +49,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 # The commits since changed speed and labels, not the cloth (bench/RESULTS.md, session 85). Clips logged on older
 # code run again. A commit that changes what the stage computes for a kind moves its entry to itself.
 SAME_CLOTH_SINCE = {"skirt": "ed120b5", "dress": "4dcabac", "shift": "4dcabac", "wrap": "4dcabac"}
-# Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated from
+# Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated as today from
 # TOPS_SINCE on: a set of clips of their own (``--set tops``), logged apart.
-TOPS_SINCE = "25f5281"
+TOPS_SINCE = "550fd4b"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
