@@ -27,11 +27,12 @@ class ClothKind:
     # it bends from flat, as panels sewn flat do, not from its rest shape's curvature: a top's shell is the
     # body's shape, and a back that had left the seat kept the seat's bulge, standing out behind (session 90)
     flat: bool = False
-    # its particles with little cloth of their own are carried by a rigid fit of the cloth round them
-    # (``simulate.slight``); not a top's: cut from the body's own mesh, a t-shirt had 180 of them in patches
-    # (armpits, underbust, the back hem's middle) that moved as rigid plates and levered its back hem 0.3 m
-    # out behind in a walk (free, it hung as a shirt does: bench/RESULTS.md, session 90)
-    carry: bool = True
+    # particles with under this share of the median particle's cloth are carried by a rigid fit of the cloth
+    # round them (``simulate.slight``). A top's is far lower than a skirt's: cut from the body's own mesh, a
+    # t-shirt had 180 under 0.35 in patches (armpits, underbust, the back hem's middle) that moved as rigid
+    # plates and levered its back hem 0.3 m out behind in a walk; none carried, a tank's particle with no
+    # cloth at all (in triangles of zero area) was flung 1.2 m as it settled (bench/RESULTS.md, session 90)
+    slight: float = 0.35
     # no air drag on its body side: close over the body, the air between is carried with it (``cloth.air``)
     sheltered: bool = False
 
@@ -77,7 +78,7 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     "shift": ClothKind("woven", above("hip_y", 0.02)),
     "wrap": ClothKind("jersey", above("hip_y", 0.02)),
     # tops over trousers or shorts (or bare legs), nothing over them: hanging from the shoulders
-    **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, carry=False,
+    **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, slight=0.01,
                        sheltered=True)
        for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
                                    ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04))},

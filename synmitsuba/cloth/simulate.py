@@ -200,7 +200,7 @@ def simulated_garments(human) -> list[_Garment]:
         rows, index = _particles(part.rest[:main], faces)
         cloth = _without_fins(_proper(index[faces]))
         held = kind.held(part.rest[rows], human.regions) | _cuffs(human, part.rest[rows], kind.cuffs)
-        carried = slight(part.rest[rows], cloth) & ~held if kind.carry else np.zeros(len(rows), bool)
+        carried = slight(part.rest[rows], cloth, kind.slight) & ~held
         lonely = carried & ~_beside_free(cloth, carried, len(rows))
         held, carried = held | lonely, carried & ~lonely
         fabric = FABRICS[fabric_of(kind, mesh.params)]
@@ -274,8 +274,8 @@ def _without_fins(faces: np.ndarray) -> np.ndarray:
 SLIGHT = 0.35  # a particle with under this share of the median particle's cloth is held (see ``slight``)
 
 
-def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(P,) bool: particles whose triangles hold under ``SLIGHT`` of the median particle's area.
+def slight(q: np.ndarray, faces: np.ndarray, share: float = SLIGHT) -> np.ndarray:
+    """(P,) bool: particles whose triangles hold under ``share`` of the median particle's area.
     The solver's pull on a particle scales with that area: slivers where a dress's bodice meets
     its skirt, just under the held line, left a shift's vertex with 1 % of it, which a running
     hand threw off and the cloth never pulled back (1.1 m from its neighbours: issue 34's
@@ -287,7 +287,7 @@ def slight(q: np.ndarray, faces: np.ndarray) -> np.ndarray:
     256; carried, 4 mm)."""
     area = np.zeros(len(q))
     np.add.at(area, faces.ravel(), np.repeat(triangle_areas(q[faces]), 3))
-    return area < SLIGHT * np.median(area[area > 0])
+    return area < share * np.median(area[area > 0])
 
 
 def _within_two_edges(faces: np.ndarray, n: int):
