@@ -51,7 +51,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SAME_CLOTH_SINCE = {"skirt": "ed120b5", "dress": "4dcabac", "shift": "4dcabac", "wrap": "4dcabac"}
 # Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated as today from
 # TOPS_SINCE on: a set of clips of their own (``--set tops``), logged apart.
-TOPS_SINCE = "550fd4b"
+TOPS_SINCE = "6271691"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
