@@ -95,5 +95,14 @@ def worn_over(name: str, worn: Iterable[str]) -> list[str]:
     """The garment kinds of ``worn`` (not shoes) that go over garment kind ``name``: higher in
     the dressing order (``GarmentKind.order``: a jacket over a top, a skirt over the top tucked
     into it)."""
-    order = GARMENTS[name].order
-    return [w for w in worn if GARMENTS[w].order > order and not GARMENTS[w].footwear]
+    return [w for w in worn if _dressed(w) and GARMENTS[w].order > GARMENTS[name].order]
+
+
+def worn_under(name: str, worn: Iterable[str]) -> list[str]:
+    """The garment kinds of ``worn`` (not shoes) that go under garment kind ``name``: lower in
+    the dressing order (trousers under a top)."""
+    return [w for w in worn if _dressed(w) and GARMENTS[w].order < GARMENTS[name].order]
+
+
+def _dressed(kind: str) -> bool:
+    return not GARMENTS[kind].footwear

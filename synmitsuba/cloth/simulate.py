@@ -23,11 +23,11 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.garments import GARMENTS, hem_sources
+from synmitsuba.body.garments import hem_sources
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
-from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, worn_over
+from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, worn_over, worn_under
 from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.cloth.web import thigh_web
@@ -193,10 +193,7 @@ def simulated_garments(human) -> list[_Garment]:
         kind = CLOTH_KINDS.get(part.name)
         if kind is None or (kind.outermost and worn_over(part.name, [m.params.kind for m in human.garments])):
             continue
-        mesh = next(m for m in human.garments if m.params.kind == part.name)
-        band = hem_sources(mesh)
-        main = len(part.rest) - len(band)
-        faces = part.faces[:len(part.faces) - mesh.hem[0]]
+        mesh, band, main, faces = _without_band(human, part)
         rows, index = _particles(part.rest[:main], faces)
         cloth = _without_fins(_proper(index[faces]))
         held = kind.held(part.rest[rows], human.regions) | _cuffs(human, part.rest[rows], kind.cuffs)
@@ -211,14 +208,17 @@ def simulated_garments(human) -> list[_Garment]:
     return out
 
 
+def _without_band(human, part):
+    """A garment layer's mesh (``GarmentMesh``), its hem band's edge vertices, how many of its
+    vertices come before the band's and its faces but the band's (the band is the last of both)."""
+    mesh = next(m for m in human.garments if m.params.kind == part.name)
+    band = hem_sources(mesh)
+    return mesh, band, len(part.rest) - len(band), part.faces[:len(part.faces) - mesh.hem[0]]
+
+
 def _worn_under(human, name: str) -> list[int]:
-    """The parts (indices) of the garments (not shoes) that the subject wears under garment
-    ``name``: lower in the dressing order."""
-    order, under = GARMENTS[name].order, set()
-    for m in human.garments:
-        kind = GARMENTS[m.params.kind]
-        if kind.order < order and not kind.footwear:
-            under.add(m.params.kind)
+    """The parts (indices) of the garments that the subject wears under garment ``name``."""
+    under = set(worn_under(name, [m.params.kind for m in human.garments]))
     return [k for k, part in enumerate(human.parts) if part.name in under]
 
 
@@ -357,11 +357,9 @@ class _Under:
     @classmethod
     def of(cls, human, k: int) -> _Under:
         part = human.parts[k]
-        mesh = next(m for m in human.garments if m.params.kind == part.name)
-        main = len(part.rest) - len(hem_sources(mesh))
+        _, _, main, faces = _without_band(human, part)
         rows, index = np.unique(weld(part.rest[:main]), return_inverse=True)
-        faces = index.reshape(-1)[part.faces[:len(part.faces) - mesh.hem[0]]]
-        return cls(k, rows, _proper(faces))
+        return cls(k, rows, _proper(index.reshape(-1)[faces]))
 
 
 def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Collider]:
@@ -524,8 +522,9 @@ def _collider_parts(faces: np.ndarray, slippery: np.ndarray | None, n: int, worn
     open where they were cut apart, Newton's mesh contacts took cloth near the cut for inside
     and threw it off (9 of 37 stability clips raised), so each cut loop is capped by a fan
     round a vertex at its middle."""
-    if slippery is None or not slippery.any():
+    if (slippery is None or not slippery.any()) and worn is None:
         return [_Part(np.arange(n), [], faces, 1.0)]
+    slippery = np.zeros(len(faces), bool) if slippery is None else slippery
     rest = np.arange(len(faces)) >= (len(faces) if worn is None else worn)  # the faces after the body's
     groups = ((~slippery & ~rest, 1.0), (rest, WORN_MU), (slippery, 0.0))
     return [_capped(faces[pick], mu) for pick, mu in groups if pick.any()]
