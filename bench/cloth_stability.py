@@ -10,8 +10,9 @@ Clip ``k`` is drawn from ``numpy.random.default_rng(k)``: subjects are sampled a
 ``sample_subject`` draws them (``cloth: simulated``) until one wears a garment of the set of
 clips (``--set``): ``hanging`` (the default, ``bench/cloth_stability.jsonl``) a skirt, dress,
 shift or wrap; ``tops`` (``bench/cloth_stability_tops.jsonl``) a top with nothing worn over it,
-which the stage simulates since session 90 (the hanging set's clips are the same clips as
-before it: a top worn with a skirt is tucked into it, so skinned),
+which the stage simulates since session 90, or a jacket or blazer (since session 91) over
+trousers or shorts (the hanging set's clips are the same clips as before them: a top worn with a
+skirt is tucked into it, and a jacket over a skirt stays skinned),
 then a procedural motion kind is drawn, retargeted to it and simulated for ``--seconds``
 (after the stage's own settling). Logged per clip: what was worn and done, whether the
 simulation finished (or the ``ClothError`` / other exception it raised, with the garment and
@@ -61,10 +62,10 @@ def hanging(recipe) -> list[str]:
 
 
 def tops(recipe) -> list[str]:
-    """The tops a recipe wears that the cloth stage simulates (nothing worn over them)."""
-    from synmitsuba.cloth.kinds import CLOTH_KINDS, worn_over
-    worn = [g.kind for g in recipe.garments]
-    return [w for w in worn if w in CLOTH_KINDS and CLOTH_KINDS[w].outermost and not worn_over(w, worn)]
+    """The tops and jackets a recipe wears that the cloth stage simulates (nothing worn over
+    them, nothing simulated under them)."""
+    from synmitsuba.cloth.kinds import CLOTH_KINDS, simulated
+    return [w for w in simulated(g.kind for g in recipe.garments) if CLOTH_KINDS[w].layered]
 
 
 @dataclass(frozen=True)

@@ -128,8 +128,8 @@ CLOSEUPS = {"head": Closeup(_one(_closeup_camera)), "feet": Closeup(_one(_feet_c
 
 
 def _built_subject(seed: int, cloth: str = "skinned"):
-    """The sampled subject (recipe, built human) and, with ``cloth`` "simulated", its skirt or
-    dress settled in the rest pose by the cloth stage (else None; the same subject either way:
+    """The sampled subject (recipe, built human) and, with ``cloth`` "simulated", its simulated
+    garments settled in the rest pose by the cloth stage (else None; the same subject either way:
     the mode draws nothing)."""
     from synmitsuba.body.recipe import sample_subject
     from synmitsuba.body.subject import build_subject

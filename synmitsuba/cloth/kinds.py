@@ -1,7 +1,8 @@
 """Which garment kinds the cloth stage simulates, of what fabric, and which of their vertices
 it holds to the skinned garment (a waistband, a bodice, a top's yoke): those move with the body,
 the rest hangs from them. A garment kind not listed here stays skinned even under ``cloth:
-simulated`` (trousers, shorts and jackets: bench/RESULTS.md, session 90)."""
+simulated`` (trousers and shorts, bench/RESULTS.md, session 90; coats, whose straight skirt,
+closed below the waist, rode up over a run's stride and stayed bunched at the hips: session 91)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -82,6 +83,10 @@ CLOTH_KINDS: dict[str, ClothKind] = {
                        sheltered=True)
        for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
                                    ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04))},
+    # jackets and blazers over the skinned top (and trousers or shorts) under them, hanging from the shoulders
+    **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=0.04, flat=True, slight=0.01,
+                       sheltered=True)
+       for name, fabric in (("jacket", "denim"), ("blazer", "suiting"))},
 }
 
 
@@ -89,6 +94,15 @@ def fabric_of(kind: ClothKind, garment: GarmentParams) -> str:
     """The fabric a garment is simulated as: its skirt cut's when the cut names one (pressed
     pleats), else its kind's."""
     return (SKIRT_CUTS[garment.cut].fabric if garment.cut else None) or kind.fabric
+
+
+def simulated(worn: Iterable[str]) -> list[str]:
+    """The garment kinds of ``worn`` that the cloth stage simulates: those in ``CLOTH_KINDS``
+    but an ``outermost`` one with a garment worn over it and a ``layered`` one over a simulated
+    one (its collider holds the garments under it as skinned: a blazer over a skirt)."""
+    worn = list(worn)
+    free = [w for w in worn if w in CLOTH_KINDS and not (CLOTH_KINDS[w].outermost and worn_over(w, worn))]
+    return [w for w in free if not (CLOTH_KINDS[w].layered and set(worn_under(w, worn)) & set(free))]
 
 
 def worn_over(name: str, worn: Iterable[str]) -> list[str]:

@@ -27,7 +27,7 @@ from synmitsuba.body.garments import hem_sources
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
-from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, worn_over, worn_under
+from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, simulated, worn_under
 from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.cloth.web import thigh_web
@@ -188,11 +188,11 @@ class _Garment:
 
 def simulated_garments(human) -> list[_Garment]:
     """The subject's garments that the cloth stage simulates, as particles."""
-    out = []
+    out, names = [], simulated([m.params.kind for m in human.garments])
     for k, part in enumerate(human.parts):
-        kind = CLOTH_KINDS.get(part.name)
-        if kind is None or (kind.outermost and worn_over(part.name, [m.params.kind for m in human.garments])):
+        if part.name not in names:
             continue
+        kind = CLOTH_KINDS[part.name]
         mesh, band, main, faces = _without_band(human, part)
         rows, index = _particles(part.rest[:main], faces)
         cloth = _without_fins(_proper(index[faces]))
