@@ -23,7 +23,7 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.garments import hem_sources
+from synmitsuba.body.garments import GARMENTS, hem_sources
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
@@ -160,7 +160,7 @@ class Collider:
     body_count: int | None = None  # how many of ``faces`` (the first) are the closed body's; None: all. Those after
     # them: the skinned garments worn under a ``ClothKind.layered`` one (``inner``: open shells, capped where
     # ``_collider_parts`` closes the collider) and the web between its thighs (``cloth.web``)
-    inner: np.ndarray | None = None  # (T, 3)
+    inner: tuple[np.ndarray, ...] = ()  # each garment's (T, 3), inner first (trousers, then the top over them)
 
     @property
     def body_faces(self) -> np.ndarray:
@@ -334,13 +334,17 @@ def _outside_body(frames: dict, collider: Collider, s: ClothSettings) -> dict:
     """Every garment vertex, held and hem band too, out of the body at each frame by half the
     particle radius (``outside.keep_outside``: the whole body mesh, not the nearest vertices')."""
     from synmitsuba.cloth.outside import keep_outside
-    inner = None if collider.inner is None else _capped(collider.inner, 1.0)
+    inner = [_capped(faces, 1.0) for faces in collider.inner]
     for f in range(collider.n_frames):
         body = collider.at(f)[0]
         for v in frames.values():
             v[f] = keep_outside(body, collider.body_faces, v[f], s.particle_radius / 2)
-            if inner is not None:  # and out of the garments under it, closed (open, a winding number reads nothing)
-                v[f] = keep_outside(inner.place(body), inner.faces, v[f], s.particle_radius / 2)
+            # and out of each garment under it, closed (open, a winding number reads nothing), inner first,
+            # twice over two (the top's push can end in the trousers where they overlap): out of the union of a
+            # jacket's t-shirt and trousers, a vertex between them at the hips was set out of the trousers, still
+            # 18 mm inside the t-shirt (bench/RESULTS.md, session 91)
+            for part in inner * min(len(inner), 2):
+                v[f] = keep_outside(part.place(body), part.faces, v[f], s.particle_radius / 2)
     return frames
 
 
@@ -369,7 +373,8 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
     garments = simulated_garments(human)
     layered = any(CLOTH_KINDS[g.name].layered for g in garments)
     under = [_Under.of(human, k) for k in sorted({k for g in garments if CLOTH_KINDS[g.name].layered
-                                                   for k in _worn_under(human, g.name)})]
+                                                   for k in _worn_under(human, g.name)},
+                                                  key=lambda k: (GARMENTS[human.parts[k].name].order, k))]
     web, web_faces = thigh_web(human.body.vertices, human.regions.group, human.regions.crotch_y) if layered else \
         (np.zeros(0, np.int64), np.zeros((0, 3), np.int64))
 
@@ -397,11 +402,11 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
         return out_of_body(human, body[:nb], q, s.particle_radius / 2)
 
     starts = np.cumsum([nb] + [len(u.rows) for u in under])
-    inner = np.concatenate([u.faces + a for u, a in zip(under, starts)]) if under else None
+    inner = tuple(u.faces + a for u, a in zip(under, starts))
     if not layered:
         faces, body_count = human.body.faces, None
     else:
-        faces = np.concatenate([human.body.faces, *([] if inner is None else [inner]), web_faces + starts[-1]])
+        faces = np.concatenate([human.body.faces, *inner, web_faces + starts[-1]])
         body_count = len(human.body.faces)
     hands = (np.asarray(human.regions.group) == "hand")[human.body.faces].any(axis=1)
     hands = np.concatenate([hands, np.zeros(len(faces) - len(hands), bool)])
