@@ -1,7 +1,8 @@
 """The cloth stage against skinned garments (issue 34's goals), per subject x motion clip.
 
 Each subject wears a skirt or a dress (alternately; with a t-shirt under a skirt), or with
-``--garments tshirt`` (``longsleeve``) a t-shirt (long sleeve) over trousers, built once
+``--garments tshirt`` (``longsleeve``) a t-shirt (long sleeve) over trousers (both simulated, the
+top against the trousers as simulated), or with ``trousers`` the trousers under a t-shirt, built once
 for simulation (``cloth: simulated``: its skirt ``SIMULATED_DENSITY`` times finer each way) and
 once skinned (``cloth: skinned``, today's mesh), and put through each motion; per clip the cloth
 stage simulates the garment (``synmitsuba.simulate_cloth``) and, on the same frames, the skinned
@@ -83,8 +84,8 @@ def inside(points, body, faces) -> tuple[float, float]:
 INNER = ("tshirt", "longsleeve")  # worn with a skirt, a top is tucked in: it ends 3 cm below the waist
 # what each measured garment is worn with, and which of that is under it (the garment-against-garment goal)
 OUTFITS = {"skirt": ["tshirt", "skirt"], "dress": ["dress"], "tshirt": ["tshirt", "trousers"],
-           "longsleeve": ["longsleeve", "trousers"]}
-UNDER = {"skirt": INNER, "dress": (), "tshirt": ("trousers",), "longsleeve": ("trousers",)}
+           "longsleeve": ["longsleeve", "trousers"], "trousers": ["tshirt", "trousers"]}
+UNDER = {"skirt": INNER, "dress": (), "tshirt": ("trousers",), "longsleeve": ("trousers",), "trousers": ()}
 ARMS = ("upperarm", "lowerarm", "hand")
 
 
@@ -232,6 +233,8 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
             if inner[h] is not None and kind != "same_mesh":
                 name, faces, edge, sleeve = inner[h]
                 top = next(la.vertices for la in layers if la.name == name)
+                if kind == "sim" and name in track.frames:  # simulated too (trousers under a top): as simulated
+                    top = track.frames[name][f]
                 for key, skip in (("under", edge | sleeve), ("sleeve", edge | ~sleeve)):
                     share, deep = under(v, top, faces, skip)
                     out[kind][key].append(share)
@@ -259,7 +262,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
     ap.add_argument("--garments", default="skirt,dress",
                     help="skirt and dress: only the subjects wearing these (alternate subjects; skirt: the layered "
-                         "ones); tshirt, longsleeve (over trousers): every subject wears them in turn")
+                         "ones); tshirt, longsleeve (over trousers), trousers (under a t-shirt): every subject wears them in turn")
     ap.add_argument("--summarize", nargs="+", help="print the summary of these rows files and stop")
     ap.add_argument("--start-at-rest", action="store_true",
                     help="start the cloth at rest when the clip starts (as before it took its held part's velocity)")

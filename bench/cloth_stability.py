@@ -9,10 +9,11 @@ the counted rows.
 Clip ``k`` is drawn from ``numpy.random.default_rng(k)``: subjects are sampled as
 ``sample_subject`` draws them (``cloth: simulated``) until one wears a garment of the set of
 clips (``--set``): ``hanging`` (the default, ``bench/cloth_stability.jsonl``) a skirt, dress,
-shift or wrap; ``tops`` (``bench/cloth_stability_tops.jsonl``) a top with nothing worn over it,
-which the stage simulates since session 90, or a jacket or blazer (since session 91) over
-trousers or shorts (the hanging set's clips are the same clips as before them: a top worn with a
-skirt is tucked into it, and a jacket over a skirt stays skinned),
+shift or wrap; ``tops`` (``bench/cloth_stability_tops.jsonl``) anything else the stage
+simulates: a top with nothing worn over it (since session 90), a jacket or blazer (since
+session 91), trousers or shorts (since session 92) (the hanging set's clips are the same clips as
+before them: a top worn with a skirt is tucked into it; a jacket over a skirt, simulated after it
+since session 92, is not measured there),
 then a procedural motion kind is drawn, retargeted to it and simulated for ``--seconds``
 (after the stage's own settling). Logged per clip: what was worn and done, whether the
 simulation finished (or the ``ClothError`` / other exception it raised, with the garment and
@@ -63,10 +64,10 @@ def hanging(recipe) -> list[str]:
 
 
 def tops(recipe) -> list[str]:
-    """The tops and jackets a recipe wears that the cloth stage simulates (nothing worn over
-    them, nothing simulated under them)."""
-    from synmitsuba.cloth.kinds import CLOTH_KINDS, simulated
-    return [w for w in simulated(g.kind for g in recipe.garments) if CLOTH_KINDS[w].layered]
+    """The garments a recipe wears that the cloth stage simulates but the hanging set's: tops
+    and jackets (nothing worn over them), trousers and shorts."""
+    from synmitsuba.cloth.kinds import simulated
+    return [w for w in simulated(g.kind for g in recipe.garments) if w not in SAME_CLOTH_SINCE]
 
 
 @dataclass(frozen=True)
@@ -121,13 +122,14 @@ def run_clip(k: int, seconds: float, wears=hanging) -> dict:
         return {**row, "status": type(exc).__name__, "error": repr(exc)[:300], "seconds": round(time.perf_counter() - t, 1)}
     seconds_taken = time.perf_counter() - t
     from scipy.spatial import cKDTree
-    stretch = max_stretch(human, clip, track)
+    measured = {name: v for name, v in track.frames.items() if name in {g.split("/")[0] for g in row["garments"]}}
+    stretch = max_stretch(human, clip, track, set(measured))
     finite, drift, step, off = True, 0.0, 0.0, 0.0
     for f in range(clip.n_frames):
         posed = human.pose(*clip.frame(f), face=clip.face_at(f))
         layers = {layer.name: layer for layer in posed}
         body = cKDTree(posed[0].vertices)
-        for name, v in track.frames.items():
+        for name, v in measured.items():
             finite &= bool(np.isfinite(v[f]).all())
             if not finite:
                 continue
@@ -139,13 +141,13 @@ def run_clip(k: int, seconds: float, wears=hanging) -> dict:
             "max_off_body_m": round(off, 4), "max_stretch_m": round(stretch, 4), "seconds": round(seconds_taken, 1)}
 
 
-def max_stretch(human, clip, track) -> float:
-    """Metres the most stretched edge of any simulated garment with a free particle at an end
+def max_stretch(human, clip, track, names: set[str]) -> float:
+    """Metres the most stretched edge of any simulated garment (of ``names``) with a free particle at an end
     (held ones follow the skinned garment) is longer than at rest (the solver's rest shape:
     the garment as cut, ``ClothPiece.rest``), over every frame."""
     from synmitsuba.cloth.simulate import simulated_garments
     out = 0.0
-    for g in simulated_garments(human):
+    for g in simulated_garments(human, sorted(names)):
         r = g.piece.rest
         f = g.piece.faces
         e = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)

@@ -1,8 +1,8 @@
 """Which garment kinds the cloth stage simulates, of what fabric, and which of their vertices
-it holds to the skinned garment (a waistband, a bodice, a top's yoke): those move with the body,
-the rest hangs from them. A garment kind not listed here stays skinned even under ``cloth:
-simulated`` (trousers and shorts, bench/RESULTS.md, session 90; coats, whose straight skirt,
-closed below the waist, rode up over a run's stride and stayed bunched at the hips: session 91)."""
+it holds to the skinned garment (a waistband, a bodice, a top's yoke, trousers' seat): those move
+with the body, the rest hangs from them. A garment kind not listed here stays skinned even under
+``cloth: simulated`` (coats, whose straight skirt, closed below the waist, rode up over a run's
+stride and stayed bunched at the hips: bench/RESULTS.md, session 91; a jumpsuit)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -85,6 +85,12 @@ CLOTH_KINDS: dict[str, ClothKind] = {
        for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
                                    ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04),
                                    ("jacket", "denim", 0.04), ("blazer", "suiting", 0.04))},
+    # trousers and shorts, held from the crotch up (the seat and the crotch, where the legs' tubes would be
+    # pinched between the thighs), the legs hanging from there; held further down under a skinned garment
+    # that reaches lower (a coat's skirt: ``simulate.simulated_garments``)
+    **{name: ClothKind(fabric, above("crotch_y", 0.0), flat=True, slight=0.01, sheltered=True)
+       for name, fabric in (("trousers", "denim"), ("shorts", "denim"), ("jeans", "denim"), ("chinos", "denim"),
+                            ("joggers", "jersey"))},
 }
 
 
@@ -96,11 +102,20 @@ def fabric_of(kind: ClothKind, garment: GarmentParams) -> str:
 
 def simulated(worn: Iterable[str]) -> list[str]:
     """The garment kinds of ``worn`` that the cloth stage simulates: those in ``CLOTH_KINDS``
-    but an ``outermost`` one with a garment worn over it and a ``layered`` one over a simulated
-    one (its collider holds the garments under it as skinned: a blazer over a skirt)."""
+    but an ``outermost`` one with a garment worn over it."""
     worn = list(worn)
-    free = [w for w in worn if w in CLOTH_KINDS and not (CLOTH_KINDS[w].outermost and worn_over(w, worn))]
-    return [w for w in free if not (CLOTH_KINDS[w].layered and set(worn_under(w, worn)) & set(free))]
+    return [w for w in worn if w in CLOTH_KINDS and not (CLOTH_KINDS[w].outermost and worn_over(w, worn))]
+
+
+def stages(worn: Iterable[str]) -> list[list[str]]:
+    """The simulated kinds of ``worn`` in the order the cloth stage simulates them: a ``layered``
+    kind after the simulated ones under it, whose simulated cloth its collider holds (a t-shirt
+    over trousers); the others first, side by side."""
+    free, depth = simulated(worn), dict[str, int]()
+    for w in sorted(free, key=lambda w: GARMENTS[w].order):
+        under = [depth[u] for u in worn_under(w, free)] if CLOTH_KINDS[w].layered else []
+        depth[w] = 1 + max(under) if under else 0
+    return [[w for w in free if depth[w] == k] for k in range(max(depth.values(), default=-1) + 1)]
 
 
 def worn_over(name: str, worn: Iterable[str]) -> list[str]:

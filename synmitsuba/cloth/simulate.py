@@ -1,6 +1,7 @@
 """``simulate_cloth(human, motion) -> ClothTrack``: a subject's hanging garments (``CLOTH_KINDS``)
 simulated over its clip with Newton's VBD cloth solver on the CPU (deterministic: Warp's CPU
-kernels run in order), against the posed body as a moving mesh collider (its hands a closed
+kernels run in order), layer by layer (``kinds.stages``: trousers, then the top over them against
+the trousers as simulated), against the posed body as a moving mesh collider (its hands a closed
 shape of their own, without friction) and the ground.
 
 Each garment's uv seams are welded (else its panels fall apart); its held vertices (a
@@ -27,7 +28,7 @@ from synmitsuba.body.garments import GARMENTS, hem_sources
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
-from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, simulated, worn_under
+from synmitsuba.cloth.kinds import CLOTH_KINDS, fabric_of, simulated, stages, worn_over, worn_under
 from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.cloth.web import thigh_web
@@ -186,9 +187,11 @@ class _Garment:
     depth: np.ndarray
 
 
-def simulated_garments(human) -> list[_Garment]:
-    """The subject's garments that the cloth stage simulates, as particles."""
-    out, names = [], simulated([m.params.kind for m in human.garments])
+def simulated_garments(human, names: list[str] | None = None) -> list[_Garment]:
+    """The subject's garments that the cloth stage simulates (those of them in ``names``, one of
+    ``kinds.stages``; None: all), as particles."""
+    every = simulated([m.params.kind for m in human.garments])
+    out, names = [], every if names is None else names
     for k, part in enumerate(human.parts):
         if part.name not in names:
             continue
@@ -196,7 +199,8 @@ def simulated_garments(human) -> list[_Garment]:
         mesh, band, main, faces = _without_band(human, part)
         rows, index = _particles(part.rest[:main], faces)
         cloth = _without_fins(_proper(index[faces]))
-        held = kind.held(part.rest[rows], human.regions) | _cuffs(human, part.rest[rows], kind.cuffs)
+        held = kind.held(part.rest[rows], human.regions) | _cuffs(human, part.rest[rows], kind.cuffs) | \
+            _covered(human, part.rest[rows], part.name, every)
         carried = slight(part.rest[rows], cloth, kind.slight) & ~held
         lonely = carried & ~_beside_free(cloth, carried, len(rows))
         held, carried = held | lonely, carried & ~lonely
@@ -238,6 +242,26 @@ def _cuffs(human, rest: np.ndarray, band: float) -> np.ndarray:
         if sleeve.any():
             held |= sleeve & (s >= s[sleeve].max() - band)
     return held
+
+
+COVER = 0.02  # metres under the end of a skinned garment worn over a simulated one that it is held down to
+
+
+def _covered(human, rest: np.ndarray, name: str, every: list[str]) -> np.ndarray:
+    """(V,) bool: the garment's vertices from ``COVER`` under the lowest end of each skinned
+    garment worn over it up (its lowest vertex over the torso or legs, not a sleeve's): free
+    cloth there would pass through the skinned one (trousers' legs under a coat's skirt, or
+    under a t-shirt that stays skinned under a jacket). None when nothing skinned is over it."""
+    over = [w for w in worn_over(name, [m.params.kind for m in human.garments]) if w not in every]
+    if not over:
+        return np.zeros(len(rest), bool)
+    from scipy.spatial import cKDTree
+    tree, low = cKDTree(human.body.vertices), np.inf
+    for part in human.parts:
+        if part.name in over:
+            body = np.asarray(human.regions.group)[tree.query(part.rest)[1]]
+            low = min(low, float(part.rest[np.isin(body, ["torso", "upperleg", "lowerleg"]), 1].min(initial=np.inf)))
+    return rest[:, 1] >= low - COVER
 
 
 SHORT = 0.002  # metres: a cloth edge shorter than this is collapsed to a point (see ``_particles``)
@@ -319,15 +343,16 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
     garment and frame where a simulation goes non-finite or strays ``max_drift`` from the
     skinned garment."""
     s = settings or ClothSettings()
-    garments, collider = cloth_inputs(human, motion, s)
-    if not garments:
-        return None
-    q = drape([g.piece for g in garments], collider, s, names=[g.name for g in garments])
-    frames, start = {}, 0
-    for g in garments:
-        frames[g.name] = _with_band(g, q[:, start:start + len(g.rows)][:, g.index])
-        start += len(g.rows)
-    return ClothTrack(_outside_body(frames, collider, s))
+    done: dict = {}
+    for names in stages([m.params.kind for m in human.garments]):
+        garments, collider = cloth_inputs(human, motion, s, names, done)
+        q = drape([g.piece for g in garments], collider, s, names=[g.name for g in garments])
+        frames, start = {}, 0
+        for g in garments:
+            frames[g.name] = _with_band(g, q[:, start:start + len(g.rows)][:, g.index])
+            start += len(g.rows)
+        done.update(_outside_body(frames, collider, s))
+    return ClothTrack(done) if done else None
 
 
 def _outside_body(frames: dict, collider: Collider, s: ClothSettings) -> dict:
@@ -366,11 +391,13 @@ class _Under:
         return cls(k, rows, _proper(index.reshape(-1)[faces]))
 
 
-def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Collider]:
-    """The subject's simulated garments and the moving body they drape over: the closed body
-    (and, under a ``layered`` kind, the skinned garments worn under it) and the skinned
-    garments' particles (where held ones go) per frame of ``motion``."""
-    garments = simulated_garments(human)
+def cloth_inputs(human, motion, s: ClothSettings, names: list[str] | None = None,
+                 done: dict | None = None) -> tuple[list[_Garment], Collider]:
+    """The subject's simulated garments (those in ``names``; None: all) and the moving body they
+    drape over: the closed body (and, under a ``layered`` kind, the garments worn under it:
+    simulated, as ``done`` has them per frame, else skinned) and the skinned garments'
+    particles (where held ones go) per frame of ``motion``."""
+    garments, done = simulated_garments(human, names), done or {}
     layered = any(CLOTH_KINDS[g.name].layered for g in garments)
     under = [_Under.of(human, k) for k in sorted({k for g in garments if CLOTH_KINDS[g.name].layered
                                                    for k in _worn_under(human, g.name)},
@@ -378,21 +405,23 @@ def cloth_inputs(human, motion, s: ClothSettings) -> tuple[list[_Garment], Colli
     web, web_faces = thigh_web(human.body.vertices, human.regions.group, human.regions.crotch_y) if layered else \
         (np.zeros(0, np.int64), np.zeros((0, 3), np.int64))
 
-    def posed(rotations: np.ndarray, root: np.ndarray, face) -> tuple[np.ndarray, np.ndarray]:
+    def posed(rotations: np.ndarray, root: np.ndarray, face, frame: int) -> tuple[np.ndarray, np.ndarray]:
         layers = human.pose(rotations, root, face=face)  # (closed body, skinned garments' particles)
         body = human.closed_body(layers)
-        body = np.concatenate([body, *(layers[u.part].vertices[u.rows] for u in under), body[web]])
+        worn = [done[human.parts[u.part].name][frame] if human.parts[u.part].name in done else layers[u.part].vertices
+                for u in under]
+        body = np.concatenate([body, *(v[u.rows] for v, u in zip(worn, under)), body[web]])
         return body, np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
 
     def at(frame: int) -> tuple[np.ndarray, np.ndarray]:
         rotations, root = motion.frame(frame)
-        return posed(rotations, root, motion.face_at(frame))
+        return posed(rotations, root, motion.face_at(frame), frame)
 
     arms = arm_joints(human.skeleton)
 
-    def lead(w: float) -> tuple[np.ndarray, np.ndarray]:
-        rotations, root = arms_from_rest(motion.frame(0), arms, w)
-        return posed(rotations, root, motion.face_at(0))
+    def lead(w: float) -> tuple[np.ndarray, np.ndarray]:  # a simulated garment under it as at frame 0 (the legs
+        rotations, root = arms_from_rest(motion.frame(0), arms, w)  # are, only the arms come down)
+        return posed(rotations, root, motion.face_at(0), 0)
 
     seals, nb = _seals(human, garments), len(human.body.vertices)
 
