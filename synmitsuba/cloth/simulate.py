@@ -201,6 +201,8 @@ def simulated_garments(human, names: list[str] | None = None) -> list[_Garment]:
         cloth = _without_fins(_proper(index[faces]))
         held = kind.held(part.rest[rows], human.regions) | _cuffs(human, part.rest[rows], kind.cuffs) | \
             _covered(human, part.rest[rows], part.name, every)
+        if held.all():  # nothing of it hangs (shorts under a skinned shirt that reaches past them): skinned
+            continue
         carried = slight(part.rest[rows], cloth, kind.slight) & ~held
         lonely = carried & ~_beside_free(cloth, carried, len(rows))
         held, carried = held | lonely, carried & ~lonely
@@ -346,6 +348,8 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
     done: dict = {}
     for names in stages([m.params.kind for m in human.garments]):
         garments, collider = cloth_inputs(human, motion, s, names, done)
+        if not garments:
+            continue
         q = drape([g.piece for g in garments], collider, s, names=[g.name for g in garments])
         frames, start = {}, 0
         for g in garments:
