@@ -78,8 +78,8 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     "dress": ClothKind("jersey", above("hip_y", 0.02)),   # the bodice follows the body, the skirt hangs from it
     "shift": ClothKind("woven", above("hip_y", 0.02)),
     "wrap": ClothKind("jersey", above("hip_y", 0.02)),
-    # tops over trousers or shorts (or bare legs), and jackets and blazers over the skinned top and trousers
-    # under them, nothing over them: hanging from the shoulders
+    # tops over trousers or shorts (or bare legs), and jackets and blazers over the top (skinned) and the
+    # trousers, shorts or skirt (simulated first: ``stages``) under them, nothing over them: hanging from the shoulders
     **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, slight=0.01,
                        sheltered=True)
        for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
