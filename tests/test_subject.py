@@ -90,7 +90,8 @@ def test_no_garment_vertex_inside_the_body_at_rest_and_layers_nest(human):
     for g in human.garments:
         d = signed_distance(body.vertices, body.faces, g.vertices)
         assert d.min() > 0, g.params.kind
-        dist[g.params.kind] = np.median(d)
+        seat = g.vertices[:, 1] >= human.regions.crotch_y  # under it trouser legs hang as tubes (test_legs.py)
+        dist[g.params.kind] = np.median(d[seat])
     assert dist["trousers"] < dist["tshirt"] < dist["jacket"]
 
 

@@ -30,6 +30,12 @@ from synmitsuba.scene.layers import Layer
 CLEARANCE = 0.002
 SNUG = 0.003  # metres over its thickness the tightest graded garment stands off the body
 LEG_ROOM_RAMP = 0.15  # metres under the crotch over which a bottom cut large lets out to its full room
+# trouser legs (``hang_legs``): metres under the crotch over which a leg turns from the seat's shell
+# into its tube; metres between the heights its tube is measured at (each over twice that up and
+# down); metres off the middle between the legs the tubes stay (the inner seams hang close, not
+# through each other); and the percentile of each height's points the tube clears (the thigh's
+# fullest side, not a stray point)
+LEG_TUBE = (0.08, 0.01, 0.008, 80.0)
 # a top's slope going down (``drape``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
 # further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
 # and no inner garment hangs out through the one over it
@@ -157,8 +163,9 @@ def _feet(g, r, v):
 @dataclass(frozen=True)
 class GarmentKind:
     """Everything a garment kind is. ``shape``: ``shell`` (the region offset from the body),
-    ``flare`` (a skirt surface from the waist), ``shell+flare`` (a dress: bodice + skirt) or
-    ``hull`` (convex hull of the region, for shoes). ``order``: dressing order, lower goes on
+    ``legs`` (a shell whose legs hang as tubes: ``hang_legs``), ``flare`` (a skirt surface from
+    the waist), ``shell+flare`` (a dress: bodice + skirt) or ``hull`` (convex hull of the
+    region, for shoes). ``order``: dressing order, lower goes on
     first and higher kinds sit outside it (shoes are separate): bottoms 1 (a top hangs over
     them), tops and dresses 2, a skirt 3 (over the top tucked into it), jackets and coats 4."""
 
@@ -179,6 +186,8 @@ class GarmentKind:
     cut: str | None = None        # a flare's cut (SKIRT_CUTS) when the garment names none; None: a_line
     prints: bool = False          # a drawn decal is printed on its chest (other kinds are drawn without one)
     panels: str | None = None     # its pattern laid on these panels (body.panels.PANEL_LAYOUTS); None: over its uv
+    # a ``legs`` shape's: metres its tubes may come in towards each leg's middle a metre down (above the knee, below it)
+    taper: tuple[float, float] = (0.0, 0.0)
 
 
 # One entry per kind: a new garment kind is one line here (and, to be sampled, an outfit).
@@ -202,17 +211,19 @@ GARMENTS: dict[str, GarmentKind] = {
     # a blazer: a jacket's hip-length bodice, open over the top in a V down to its buttons
     "blazer": GarmentKind(Layer.TOP, 0.025, 4, "shell", _open_front(_top(lambda L: 0.95), BLAZER_V), (0.3, 0.55),
                           (0.005, 0.02), (0.003, 0.008), fabric="plain", panels="top"),
-    "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
-                            fabric="twill", panels="bottom"),
-    "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
-                              fabric="twill", panels="bottom"),
-    "jeans": GarmentKind(Layer.BOTTOM, 0.004, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
-                         (0.0, 0.012), fabric="twill", panels="bottom"),
-    "chinos": GarmentKind(Layer.BOTTOM, 0.005, 1, "shell", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
-                          fabric="twill", panels="bottom"),
-    # joggers: jersey, ending gathered above the ankle (their taper and cuffs are not modelled)
-    "joggers": GarmentKind(Layer.BOTTOM, 0.008, 1, "shell", _bottom(lambda L: 0.9 + 0.06 * L), (0.0, 1.0),
-                           (0.005, 0.02), (0.002, 0.005), fabric="jersey", panels="bottom"),
+    # bottoms: the seat a shell, the legs tubes hanging round them (``hang_legs``), straight from the thigh
+    # (shorts), a little tapered to the hem (trousers, chinos; jeans slimmer), or gathered to the ankle (joggers)
+    "shorts": GarmentKind(Layer.BOTTOM, 0.005, 1, "legs", _bottom(lambda L: 0.1 + 0.35 * L), (0.1, 0.45),
+                          fabric="twill", panels="bottom", taper=(0.05, 0.05)),
+    "trousers": GarmentKind(Layer.BOTTOM, 0.005, 1, "legs", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                            fabric="twill", panels="bottom", taper=(0.14, 0.012)),
+    "jeans": GarmentKind(Layer.BOTTOM, 0.004, 1, "legs", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                         (0.0, 0.012), fabric="twill", panels="bottom", taper=(0.16, 0.025)),
+    "chinos": GarmentKind(Layer.BOTTOM, 0.005, 1, "legs", _bottom(lambda L: 0.75 + 0.27 * L), (0.85, 1.0),
+                          fabric="twill", panels="bottom", taper=(0.14, 0.02)),
+    # joggers: jersey, tapering to above the ankle (their gathered cuffs are not modelled)
+    "joggers": GarmentKind(Layer.BOTTOM, 0.008, 1, "legs", _bottom(lambda L: 0.9 + 0.06 * L), (0.0, 1.0),
+                           (0.005, 0.02), (0.002, 0.005), fabric="jersey", panels="bottom", taper=(0.14, 0.12)),
     "skirt": GarmentKind(Layer.BOTTOM, 0.006, 3, "flare", None, (0.2, 0.8), (0.005, 0.03), skirted=True,
                          tucks_tops=True, panels="skirt"),
     "dress": GarmentKind(Layer.DRESS, 0.012, 2, "shell+flare", _top(lambda L: 0.2 * L, dress=True), (0.3, 0.9),
@@ -224,9 +235,10 @@ GARMENTS: dict[str, GarmentKind] = {
                                                                         WRAP_V), (0.35, 0.9), (0.005, 0.03),
                         skirted=True, takes_jacket=False, panels="dress"),
     # a one-piece from the neck to the ankles: a top's torso and sleeves and trousers' legs
-    "jumpsuit": GarmentKind(Layer.DRESS, 0.01, 2, "shell", _union(_top(lambda L: 0.1 + 0.8 * L),
-                                                                    _bottom(lambda L: 0.9 + 0.12 * L)),
-                            (0.0, 1.0), (0.005, 0.02), fabric="twill", takes_jacket=False, panels="one_piece"),
+    "jumpsuit": GarmentKind(Layer.DRESS, 0.01, 2, "legs", _union(_top(lambda L: 0.1 + 0.8 * L),
+                                                                   _bottom(lambda L: 0.9 + 0.12 * L)),
+                            (0.0, 1.0), (0.005, 0.02), fabric="twill", takes_jacket=False, panels="one_piece",
+                            taper=(0.1, 0.015)),
     "shoes": GarmentKind(Layer.SHOES, 0.004, 0, "hull", _feet, (0.2, 0.8), fabric="none", footwear=True),
     # built round the foot (body/shoes.py); thickness is the sole's height, length the collar's (and shaft's)
     **{name: GarmentKind(Layer.SHOES, ALLOWANCE, 0, "heeled" if SHOE_STYLES[name].heel[1] else "shoe", None,
@@ -715,6 +727,57 @@ def _let_out_legs(body, r: BodyRegions, v: np.ndarray, room: float) -> np.ndarra
     return v + n * (room * t * t * (3 - 2 * t))[:, None]
 
 
+def _legs_middle(body, r: BodyRegions) -> float:
+    """The x of the middle between the legs: the mean of the torso's and legs' points under the hips."""
+    legs = np.isin(r.group, ["torso", "upperleg", "lowerleg"]) & (body.vertices[:, 1] < r.hip_y)
+    return float(body.vertices[legs, 0].mean())
+
+
+def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -> np.ndarray:
+    """A bottom's legs as cloth hangs round them, not as a shell of them: under the crotch each
+    leg's points move out from the middle of its cross-section to a tube whose radius, going down,
+    comes in by at most ``taper`` times the drop (above the knee, below it) from the fullest part
+    above (the thigh's, the calf's): it stands clear of the knee, the calf's hollows and the ankle.
+    The seat's flesh is not the thigh's, nor the heel the ankle's: the fullness counts from
+    ``LEG_TUBE[0]`` under the crotch (over which the legs turn from the shell into their tubes) to
+    half that over the ankle joint. Never nearer the middle between the
+    legs than ``LEG_TUBE[2]``. Each point's move depends on its position alone: seam copies of a
+    point move as one."""
+    ramp, step, gap, share = LEG_TUBE
+    middle, out, sk = _legs_middle(body, r), v.copy(), body.skeleton
+    for side, tag in ((1.0, "L"), (-1.0, "R")):
+        rows = np.flatnonzero((side * (v[:, 0] - middle) > 0) & (v[:, 1] < r.crotch_y))
+        if not len(rows):
+            continue
+        p, knee = v[rows], float(sk.rest_positions[sk.index(f"lowerleg01.{tag}"), 1])
+        ankle = float(sk.rest_positions[sk.index(f"foot.{tag}"), 1]) + ramp / 2
+        y = r.crotch_y - step * np.arange(int(np.ceil((r.crotch_y - p[:, 1].min()) / step)) + 1)  # going down
+        windows = [np.abs(p[:, 1] - h) <= 2 * step for h in y]
+        centre = np.array([p[w][:, [0, 2]].mean(0) if w.any() else (np.nan, np.nan) for w in windows])
+        ok = np.isfinite(centre[:, 0])
+        centre = np.stack([np.interp(y, y[ok][::-1], centre[ok, k][::-1]) for k in (0, 1)], 1)
+        rel = p[:, [0, 2]] - np.stack([np.interp(p[:, 1], y[::-1], centre[::-1, k]) for k in (0, 1)], 1)
+        d = np.maximum(np.linalg.norm(rel, axis=1), 1e-9)
+        full = np.array([np.percentile(d[w], share) if w.any() and ankle <= h <= r.crotch_y - ramp else -np.inf
+                         for w, h in zip(windows, y)])
+        drop = np.cumsum(np.where(y < knee, taper[1], taper[0]) * step) # how far the cloth may have come in by each height
+        reach = np.maximum.accumulate(full + drop) - drop  # the fullest above, come in by the taper since
+        radius = np.maximum(np.interp(p[:, 1], y[::-1], reach[::-1]), d)
+        t = np.clip((r.crotch_y - p[:, 1]) / ramp, 0.0, 1.0)
+        grow = (radius - d) * t * t * (3 - 2 * t)
+        inward = -side * rel[:, 0] / d  # how much of a step out along ``rel`` goes towards the middle
+        room = side * (p[:, 0] - middle) - np.minimum(gap, side * (p[:, 0] - middle))
+        grow = np.where(inward > 1e-6, np.minimum(grow, room / np.maximum(inward, 1e-6)), grow)
+        out[rows[:, None], [0, 2]] = p[:, [0, 2]] + rel / d[:, None] * grow[:, None]
+    return out
+
+
+def _legs_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+    """A bottom: the body region ``cut`` covers, offset from it, its legs hanging as tubes."""
+    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
+    return hang_legs(body, r, v, GARMENTS[g.kind].taper), f, uv
+
+
 def footwear_lift(g: GarmentParams) -> float:
     """How far a pair of shoes lifts the body: its sole (a convex hull shoe: its offset)."""
     return g.thickness if GARMENT_SHAPES[GARMENTS[g.kind].shape].sole else garment_offset(g)
@@ -930,6 +993,7 @@ SIMULATED_DENSITY = 2
 # A new garment shape is one entry here; GarmentKind.shape names one.
 GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell": GarmentShape(_shell_shape),
+    "legs": GarmentShape(_legs_shape),
     "flare": GarmentShape(lambda body, r, split, g, cut, offset, density=1: _flare(body, r, g, offset, r.waist_y, density),
                           weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a), dense=True),
@@ -957,7 +1021,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     maker = GARMENT_SHAPES[kind.shape]
     v, f, uv = maker.build(body, r, split, cut_for, shape, offset, **({"density": density} if maker.dense else {}))
     room = leg_room(g, fit)
-    if room and kind.shape == "shell":  # a skirt cut large keeps its flare: only its length grows
+    if room and kind.shape in ("shell", "legs"):  # a skirt cut large keeps its flare: only its length grows
         v = _let_out_legs(body, r, v, room)
     n_faces, n_vertices = len(f), len(v)
     if GARMENT_SHAPES[kind.shape].hemmed:
