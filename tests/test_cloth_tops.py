@@ -46,12 +46,14 @@ def tee_walk():
     (("tshirt", "shorts", "jacket"), [["shorts"], ["jacket"]], ["shorts", "jacket"]),
     (("shirt", "shorts", "jacket"), [["shorts"], ["jacket"]], ["jacket"]),
     (("tshirt", "skirt", "blazer"), [["skirt"], ["blazer"]], ["skirt", "blazer"]),
-    (("dress",), [["dress"]], ["dress"])])
+    (("dress",), [["dress"]], ["dress"]),
+    (("jumpsuit",), [["jumpsuit"]], ["jumpsuit"])])
 def test_a_top_is_simulated_only_with_nothing_worn_over_it_and_after_what_is_under_it(outfit, order, hanging):
     """A top tucked into a skirt, or under a jacket, stays skinned: its free hem would pass
     through the skinned garment over it; a coat is not simulated. Trousers, shorts and skirts
     are, first; a top, jacket or blazer over them after, against their simulated cloth. Shorts
-    under a skinned shirt that reaches past them (held down to under its end) stay skinned."""
+    under a skinned shirt that reaches past them (held down to under its end) stay skinned. A
+    jumpsuit hangs from its seat, as trousers do."""
     human = _subject(*outfit)
     assert {p.name for p in human.parts} >= set(outfit)
     assert stages([m.params.kind for m in human.garments]) == order

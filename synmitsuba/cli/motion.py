@@ -87,7 +87,7 @@ def add_parser(sub) -> None:
     pv.add_argument("--outfit", help="garment kinds the subject wears, comma-separated, e.g. tshirt,skirt "
                     "(default: a sampled outfit)")
     pv.add_argument("--cloth", choices=("skinned", "simulated", "both"), default="skinned",
-                    help="garments skinned, simulated over the clip (skirts, dresses, outer tops, jackets, trousers), or "
-                    "both (two rows)")
+                    help="garments skinned, simulated over the clip (skirts, dresses, outer tops, jackets, trousers, "
+                    "jumpsuits), or both (two rows)")
     pv.add_argument("--denoise", choices=DENOISERS, default="none", help="denoiser (none, oidn, ...)")
     pv.set_defaults(func=preview)

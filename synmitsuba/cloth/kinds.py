@@ -2,7 +2,7 @@
 it holds to the skinned garment (a waistband, a bodice, a top's yoke, trousers' seat): those move
 with the body, the rest hangs from them. A garment kind not listed here stays skinned even under
 ``cloth: simulated`` (coats, whose straight skirt, closed below the waist, rode up over a run's
-stride and stayed bunched at the hips: bench/RESULTS.md, session 91; a jumpsuit)."""
+stride and stayed bunched at the hips: bench/RESULTS.md, session 91)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -87,10 +87,11 @@ CLOTH_KINDS: dict[str, ClothKind] = {
                                    ("jacket", "denim", 0.04), ("blazer", "suiting", 0.04))},
     # trousers and shorts, held from the crotch up (the seat and the crotch, where the legs' tubes would be
     # pinched between the thighs), the legs hanging from there; held further down under a skinned garment
-    # that reaches lower (a coat's skirt: ``simulate.simulated_garments``)
+    # that reaches lower (a coat's skirt: ``simulate.simulated_garments``); a jumpsuit the same way, its
+    # torso and sleeves held with its seat
     **{name: ClothKind(fabric, above("crotch_y", 0.0), flat=True, slight=0.01, sheltered=True)
        for name, fabric in (("trousers", "denim"), ("shorts", "denim"), ("jeans", "denim"), ("chinos", "denim"),
-                            ("joggers", "jersey"))},
+                            ("joggers", "jersey"), ("jumpsuit", "denim"))},
 }
 
 
