@@ -35,7 +35,7 @@ LEG_ROOM_RAMP = 0.15  # metres under the crotch over which a bottom cut large le
 # down); metres off the middle between the legs the tubes stay (the inner seams hang close, not
 # through each other); and the percentile of each height's points the tube clears (the thigh's
 # fullest side, not a stray point)
-LEG_TUBE = (0.08, 0.01, 0.008, 80.0)
+LEG_TUBE = (0.08, 0.01, 0.004, 80.0)
 # a top's slope going down (``drape``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
 # further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
 # and no inner garment hangs out through the one over it
