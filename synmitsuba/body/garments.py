@@ -727,10 +727,15 @@ def _let_out_legs(body, r: BodyRegions, v: np.ndarray, room: float) -> np.ndarra
     return v + n * (room * t * t * (3 - 2 * t))[:, None]
 
 
-def _legs_middle(body, r: BodyRegions) -> float:
-    """The x of the middle between the legs: the mean of the torso's and legs' points under the hips."""
+def _legs_centre(body, r: BodyRegions) -> np.ndarray:
+    """(x, z) of the middle between the legs: the mean of the torso's and legs' points under the hips."""
     legs = np.isin(r.group, ["torso", "upperleg", "lowerleg"]) & (body.vertices[:, 1] < r.hip_y)
-    return float(body.vertices[legs, 0].mean())
+    return body.vertices[legs][:, [0, 2]].mean(0)
+
+
+def _legs_middle(body, r: BodyRegions) -> float:
+    """The x of the middle between the legs (``_legs_centre``)."""
+    return float(_legs_centre(body, r)[0])
 
 
 def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -> np.ndarray:
@@ -760,7 +765,7 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -
         d = np.maximum(np.linalg.norm(rel, axis=1), 1e-9)
         full = np.array([np.percentile(d[w], share) if w.any() and ankle <= h <= r.crotch_y - ramp else -np.inf
                          for w, h in zip(windows, y)])
-        drop = np.cumsum(np.where(y < knee, taper[1], taper[0]) * step) # how far the cloth may have come in by each height
+        drop = np.cumsum(np.where(y < knee, taper[1], taper[0]) * step)  # how far the cloth may have come in by each height
         reach = np.maximum.accumulate(full + drop) - drop  # the fullest above, come in by the taper since
         radius = np.maximum(np.interp(p[:, 1], y[::-1], reach[::-1]), d)
         t = np.clip((r.crotch_y - p[:, 1]) / ramp, 0.0, 1.0)
@@ -1048,8 +1053,7 @@ def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) 
     rows = np.flatnonzero(down > 0)
     if not len(rows):
         return weights
-    legs = np.isin(r.group, ["torso", "upperleg", "lowerleg"])
-    cx, cz = body.vertices[legs & (body.vertices[:, 1] < r.hip_y), :][:, [0, 2]].mean(0)
+    cx, cz = _legs_centre(body, r)
     p = v[rows]
     side_w = []
     for side in (1.0, -1.0):  # each half: its vertices, and the faces with all three among them
