@@ -3,7 +3,7 @@ membrane stiffness against stretch and against change of area (shear), damping, 
 stiffness, friction against the body. The values were tuned by eye on our 1-3 cm
 garment triangles at 10 substeps (softer membranes crumple like paper, see issue 34's note):
 their order between fabrics is what matters (denim and leather stiffer and heavier than
-jersey), not real moduli."""
+twill, twill heavier and firmer than jersey), not real moduli."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -26,6 +26,10 @@ FABRICS: dict[str, Fabric] = {
     "woven": Fabric(0.12, 1.0e4, 1.0e4, 1.0e-2, 1.0e-1, 1.0e-3, 0.4),    # shirting, light skirts: crisp, light
     "knit": Fabric(0.30, 5.0e3, 5.0e3, 1.5e-2, 8.0e-2, 2.0e-3, 0.6),     # sweaters: heavy and stretchy
     "suiting": Fabric(0.30, 1.5e4, 1.5e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.45),  # pressed wool, pleats: keeps a crease
-    "denim": Fabric(0.40, 2.0e4, 2.0e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.5),    # twill, chinos: stiff, heavy
+    "denim": Fabric(0.40, 2.0e4, 2.0e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.5),    # jeans, jackets: stiff, heavy
+    # cotton or wool twill (trousers, chinos): lighter than denim and six times softer to bend, so the legs
+    # crease at the knee and stack over the shoe (as denim a walk's fold energy was 653, as this 850-950:
+    # bench/RESULTS.md, session 94)
+    "twill": Fabric(0.25, 1.5e4, 1.5e4, 1.5e-2, 5.0e-2, 2.0e-3, 0.45),
     "leather": Fabric(0.60, 3.0e4, 3.0e4, 2.0e-2, 6.0e-1, 1.0e-2, 0.6),  # holds its shape
 }

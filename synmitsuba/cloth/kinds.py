@@ -90,8 +90,8 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     # that reaches lower (a coat's skirt: ``simulate.simulated_garments``); a jumpsuit the same way, its
     # torso and sleeves held with its seat
     **{name: ClothKind(fabric, above("crotch_y", 0.0), flat=True, slight=0.01, sheltered=True)
-       for name, fabric in (("trousers", "denim"), ("shorts", "denim"), ("jeans", "denim"), ("chinos", "denim"),
-                            ("joggers", "jersey"), ("jumpsuit", "denim"))},
+       for name, fabric in (("trousers", "twill"), ("shorts", "twill"), ("jeans", "denim"), ("chinos", "twill"),
+                            ("joggers", "jersey"), ("jumpsuit", "twill"))},
 }
 
 
