@@ -3,7 +3,11 @@ membrane stiffness against stretch and against change of area (shear), damping, 
 stiffness, friction against the body. The values were tuned by eye on our 1-3 cm
 garment triangles at 10 substeps (softer membranes crumple like paper, see issue 34's note):
 their order between fabrics is what matters (denim and leather stiffer and heavier than
-twill, twill heavier and firmer than jersey), not real moduli."""
+twill, twill heavier and firmer than jersey), not real moduli. Bending at these values is far
+weaker than real cloth's: an 8 cm strip of any of them held flat by one end hangs almost
+straight down (74-78 mm under the clamp within a second; real fabrics' bending lengths are 2-5
+cm), so the bending stiffness sets how small and how many the wrinkles are, not how a garment
+drapes (bench/RESULTS.md, session 94)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -28,8 +32,8 @@ FABRICS: dict[str, Fabric] = {
     "suiting": Fabric(0.30, 1.5e4, 1.5e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.45),  # pressed wool, pleats: keeps a crease
     "denim": Fabric(0.40, 2.0e4, 2.0e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.5),    # jeans, jackets: stiff, heavy
     # cotton or wool twill (trousers, chinos): lighter than denim and three times softer to bend, so the legs
-    # crease at the knee and stack over the shoe (bench/RESULTS.md, session 94); its bending length (bending
-    # over weight) still between jersey's and denim's
+    # crease at the knee and stack over the shoe (bench/RESULTS.md, session 94); its bending stiffness over its
+    # weight still between jersey's and denim's
     "twill": Fabric(0.25, 1.5e4, 1.5e4, 1.5e-2, 1.0e-1, 2.0e-3, 0.45),
     "leather": Fabric(0.60, 3.0e4, 3.0e4, 2.0e-2, 6.0e-1, 1.0e-2, 0.6),  # holds its shape
 }
