@@ -22,7 +22,7 @@ from synmitsuba.body.sizing import GRADE_LENGTH, Fit, Girths, garment_fit, measu
 from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_points, heel_height, heel_mesh, heel_pitch,
                                    lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
-from synmitsuba.body.topology import cut, weld
+from synmitsuba.body.topology import cut, refine, weld
 from synmitsuba.geometry import face_normals, unique_rows, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
@@ -738,7 +738,7 @@ def _legs_middle(body, r: BodyRegions) -> float:
     return float(_legs_centre(body, r)[0])
 
 
-def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -> np.ndarray:
+def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float], among: int | None = None) -> np.ndarray:
     """A bottom's legs as cloth hangs round them, not as a shell of them: under the crotch each
     leg's points move out from the middle of its cross-section to a tube whose radius, going down,
     comes in by at most ``taper`` times the drop (above the knee, below it) from the fullest part
@@ -747,7 +747,8 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -
     ``LEG_TUBE[0]`` under the crotch (over which the legs turn from the shell into their tubes) to
     half that over the ankle joint. Never nearer the middle between the
     legs than ``LEG_TUBE[2]``. Each point's move depends on its position alone: seam copies of a
-    point move as one."""
+    point move as one. ``among``: only the first that many points shape the tubes (a mesh made
+    finer hangs on the tubes of the points it was made from)."""
     ramp, step, gap, share = LEG_TUBE
     middle, out, sk = _legs_middle(body, r), v.copy(), body.skeleton
     for side, tag in ((1.0, "L"), (-1.0, "R")):
@@ -756,8 +757,9 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -
             continue
         p, knee = v[rows], float(sk.rest_positions[sk.index(f"lowerleg01.{tag}"), 1])
         ankle = float(sk.rest_positions[sk.index(f"foot.{tag}"), 1]) + ramp / 2
+        shaping = rows < (len(v) if among is None else among)
         y = r.crotch_y - step * np.arange(int(np.ceil((r.crotch_y - p[:, 1].min()) / step)) + 1)  # going down
-        windows = [np.abs(p[:, 1] - h) <= 2 * step for h in y]
+        windows = [shaping & (np.abs(p[:, 1] - h) <= 2 * step) for h in y]
         centre = np.array([p[w][:, [0, 2]].mean(0) if w.any() else (np.nan, np.nan) for w in windows])
         ok = np.isfinite(centre[:, 0])
         centre = np.stack([np.interp(y, y[ok][::-1], centre[ok, k][::-1]) for k in (0, 1)], 1)
@@ -777,10 +779,17 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -
     return out
 
 
-def _legs_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
-    """A bottom: the body region ``cut`` covers, offset from it, its legs hanging as tubes."""
+def _legs_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float,
+                density: int = 1):
+    """A bottom: the body region ``cut`` covers, offset from it, its legs hanging as tubes;
+    ``density`` 2: the legs' triangles under the crotch (the cloth that hangs) halved each way,
+    before they are hung on the tubes the coarse points shape (the new points on the tubes, not
+    on their chords)."""
     v, f, uv = _shell_shape(body, r, split, g, cut, offset)
-    return hang_legs(body, r, v, GARMENTS[g.kind].taper), f, uv
+    n = len(v)
+    if density > 1:
+        v, f, uv = refine(v, f, uv, (v[f][:, :, 1] < r.crotch_y).any(1))
+    return hang_legs(body, r, v, GARMENTS[g.kind].taper, among=n), f, uv
 
 
 def footwear_lift(g: GarmentParams) -> float:
@@ -992,13 +1001,15 @@ class GarmentShape:
 
 # How many times finer each way a simulated skirt's flare is than a skinned one's: 96 points
 # round (a circle skirt 120; pleats as cut) in rings 2 cm apart. At 48 round and 4 cm apart,
-# folds 2-15 cm across hardly fit (bench/cloth.py's fold energy; bench/RESULTS.md).
+# folds 2-15 cm across hardly fit (bench/cloth.py's fold energy; bench/RESULTS.md). Trouser
+# legs, cut from the body's mesh (edges 2.8 cm in the median, a tenth over 5 cm), are halved
+# the same way under the crotch: 1.5 cm.
 SIMULATED_DENSITY = 2
 
 # A new garment shape is one entry here; GarmentKind.shape names one.
 GARMENT_SHAPES: dict[str, GarmentShape] = {
     "shell": GarmentShape(_shell_shape),
-    "legs": GarmentShape(_legs_shape),
+    "legs": GarmentShape(_legs_shape, dense=True),
     "flare": GarmentShape(lambda body, r, split, g, cut, offset, density=1: _flare(body, r, g, offset, r.waist_y, density),
                           weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a), dense=True),

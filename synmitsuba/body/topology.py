@@ -80,6 +80,46 @@ def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     return _lowest_joined(cKDTree(vertices).query_pairs(tol, output_type="ndarray"), len(vertices))
 
 
+def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.ndarray):
+    """Halve every edge of the ``mark``ed faces (red-green refinement): a marked face becomes
+    four; a face with two or three of its edges halved becomes four too (repeated until none is
+    left), one with a single halved edge two, so no edge is halved on one side alone. Edges are
+    matched by position (``weld``): a seam's two copies of an edge are halved together, each
+    side keeping its own uv. Returns (vertices, faces, uv), the old vertices first."""
+    rep = weld(vertices)
+    corners = [faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]
+    keys = [np.sort(rep[c], axis=1) for c in corners]
+    uniq, inverse = np.unique(np.concatenate(keys), axis=0, return_inverse=True)
+    inverse = inverse.reshape(3, -1).T  # (F, 3): each face's edges among ``uniq``
+    red, halved = np.asarray(mark, bool).copy(), np.zeros(len(uniq), bool)
+    while True:
+        halved[inverse[red].ravel()] = True
+        more = ~red & (halved[inverse].sum(1) >= 2)
+        if not more.any():
+            break
+        red |= more
+    cut = halved[inverse]  # (F, 3) which of each face's edges is halved
+    pairs = np.concatenate([c[cut[:, k]] for k, c in enumerate(corners)])
+    pairs, mid = np.unique(np.sort(pairs, axis=1), axis=0, return_inverse=True)
+    n = len(vertices)
+    out_v = np.concatenate([vertices, vertices[pairs].mean(1)])
+    out_uv = np.concatenate([uv, uv[pairs].mean(1)])
+    m, start = np.full(faces.shape, -1), 0  # each face's midpoint on each edge, in ``pairs``' order
+    for k in range(3):
+        m[cut[:, k], k] = n + mid.ravel()[start:start + cut[:, k].sum()]
+        start += cut[:, k].sum()
+    a, b, c = faces.T
+    ab, bc, ca = m.T
+    four = np.stack([np.stack([a, ab, ca], 1), np.stack([ab, b, bc], 1), np.stack([ca, bc, c], 1),
+                     np.stack([ab, bc, ca], 1)], 1)[red].reshape(-1, 3)
+    one = ~red & cut.any(1)
+    k = np.argmax(cut[one], axis=1)  # the halved edge: rotate it to the front, then split it
+    f1, m1 = faces[one], m[one, k]
+    rot = np.stack([f1[np.arange(len(k)), (k + j) % 3] for j in range(3)], 1)
+    two = np.concatenate([np.stack([rot[:, 0], m1, rot[:, 2]], 1), np.stack([m1, rot[:, 1], rot[:, 2]], 1)])
+    return out_v, np.concatenate([faces[~red & ~one], four, two]), out_uv
+
+
 def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, tol: float) -> np.ndarray:
     """A representative index per vertex, as ``weld`` gives: the ends of every edge of ``faces``
     shorter than ``tol`` (chains of them) share one, the lowest. Only edges join: two sheets
