@@ -738,7 +738,7 @@ def _legs_middle(body, r: BodyRegions) -> float:
     return float(_legs_centre(body, r)[0])
 
 
-def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float], among: int | None = None) -> np.ndarray:
+def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -> np.ndarray:
     """A bottom's legs as cloth hangs round them, not as a shell of them: under the crotch each
     leg's points move out from the middle of its cross-section to a tube whose radius, going down,
     comes in by at most ``taper`` times the drop (above the knee, below it) from the fullest part
@@ -747,8 +747,7 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float], a
     ``LEG_TUBE[0]`` under the crotch (over which the legs turn from the shell into their tubes) to
     half that over the ankle joint. Never nearer the middle between the
     legs than ``LEG_TUBE[2]``. Each point's move depends on its position alone: seam copies of a
-    point move as one. ``among``: only the first that many points shape the tubes (a mesh made
-    finer hangs on the tubes of the points it was made from)."""
+    point move as one."""
     ramp, step, gap, share = LEG_TUBE
     middle, out, sk = _legs_middle(body, r), v.copy(), body.skeleton
     for side, tag in ((1.0, "L"), (-1.0, "R")):
@@ -757,9 +756,8 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float], a
             continue
         p, knee = v[rows], float(sk.rest_positions[sk.index(f"lowerleg01.{tag}"), 1])
         ankle = float(sk.rest_positions[sk.index(f"foot.{tag}"), 1]) + ramp / 2
-        shaping = rows < (len(v) if among is None else among)
         y = r.crotch_y - step * np.arange(int(np.ceil((r.crotch_y - p[:, 1].min()) / step)) + 1)  # going down
-        windows = [shaping & (np.abs(p[:, 1] - h) <= 2 * step) for h in y]
+        windows = [np.abs(p[:, 1] - h) <= 2 * step for h in y]
         centre = np.array([p[w][:, [0, 2]].mean(0) if w.any() else (np.nan, np.nan) for w in windows])
         ok = np.isfinite(centre[:, 0])
         centre = np.stack([np.interp(y, y[ok][::-1], centre[ok, k][::-1]) for k in (0, 1)], 1)
@@ -782,14 +780,17 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float], a
 def _legs_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float,
                 density: int = 1):
     """A bottom: the body region ``cut`` covers, offset from it, its legs hanging as tubes;
-    ``density`` 2: the legs' triangles under the crotch (the cloth that hangs) halved each way,
-    before they are hung on the tubes the coarse points shape (the new points on the tubes, not
-    on their chords)."""
+    ``density`` 2: the legs' triangles under the crotch (the cloth that hangs) halved each way
+    once they hang, each new point on the curve its edge's ends' normals give (``refine``): the
+    same tubes, smooth between the coarse points. Halved before they hang, each new point took
+    the tube's centre and radius at its own height (measured every centimetre) and the legs
+    rippled between the coarse points: their fold measure at rest was 2-3x the coarse legs'
+    (24x hung on the coarse points' tubes), now 1.7x (bench/RESULTS.md, session 95)."""
     v, f, uv = _shell_shape(body, r, split, g, cut, offset)
-    n = len(v)
+    v = hang_legs(body, r, v, GARMENTS[g.kind].taper)
     if density > 1:
         v, f, uv = refine(v, f, uv, (v[f][:, :, 1] < r.crotch_y).any(1))
-    return hang_legs(body, r, v, GARMENTS[g.kind].taper, among=n), f, uv
+    return v, f, uv
 
 
 def footwear_lift(g: GarmentParams) -> float:

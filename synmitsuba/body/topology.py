@@ -80,12 +80,15 @@ def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     return _lowest_joined(cKDTree(vertices).query_pairs(tol, output_type="ndarray"), len(vertices))
 
 
-def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.ndarray):
+def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.ndarray, curved: bool = True):
     """Halve every edge of the ``mark``ed faces (red-green refinement): a marked face becomes
     four; a face with two or three of its edges halved becomes four too (repeated until none is
     left), one with a single halved edge two, so no edge is halved on one side alone. Edges are
     matched by position (``weld``): a seam's two copies of an edge are halved together, each
-    side keeping its own uv. Returns (vertices, faces, uv), the old vertices first."""
+    side keeping its own uv. ``curved``: a new point lies on the curve through its edge's ends
+    that meets their vertex normals square (a PN triangle's edge: on a circle, its arc, not its
+    chord; a chord's midpoint is a dimple of the edge's sagitta, a bump at every new point);
+    else at the edge's middle. Returns (vertices, faces, uv), the old vertices first."""
     rep = weld(vertices)
     corners = [faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]
     keys = [np.sort(rep[c], axis=1) for c in corners]
@@ -102,7 +105,14 @@ def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.nda
     pairs = np.concatenate([c[cut[:, k]] for k, c in enumerate(corners)])
     pairs, mid = np.unique(np.sort(pairs, axis=1), axis=0, return_inverse=True)
     n = len(vertices)
-    out_v = np.concatenate([vertices, vertices[pairs].mean(1)])
+    middle = vertices[pairs].mean(1)
+    if curved:
+        normal = _welded_normals(vertices, faces, rep)
+        a, b = vertices[pairs[:, 0]], vertices[pairs[:, 1]]
+        na, nb = normal[pairs[:, 0]], normal[pairs[:, 1]]
+        middle = middle - (np.einsum("ij,ij->i", b - a, na)[:, None] * na
+                           + np.einsum("ij,ij->i", a - b, nb)[:, None] * nb) / 8
+    out_v = np.concatenate([vertices, middle])
     out_uv = np.concatenate([uv, uv[pairs].mean(1)])
     m, start = np.full(faces.shape, -1), 0  # each face's midpoint on each edge, in ``pairs``' order
     for k in range(3):
@@ -118,6 +128,16 @@ def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.nda
     rot = np.stack([f1[np.arange(len(k)), (k + j) % 3] for j in range(3)], 1)
     two = np.concatenate([np.stack([rot[:, 0], m1, rot[:, 2]], 1), np.stack([m1, rot[:, 1], rot[:, 2]], 1)])
     return out_v, np.concatenate([faces[~red & ~one], four, two]), out_uv
+
+
+def _welded_normals(vertices: np.ndarray, faces: np.ndarray, rep: np.ndarray) -> np.ndarray:
+    """Unit area-weighted vertex normals, a seam's copies of a point sharing theirs."""
+    face_n = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]])
+    acc = np.zeros_like(vertices)
+    for k in range(3):
+        np.add.at(acc, rep[faces[:, k]], face_n)
+    acc = acc[rep]
+    return acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-12)
 
 
 def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, tol: float) -> np.ndarray:
