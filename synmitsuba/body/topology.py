@@ -80,7 +80,8 @@ def weld(vertices: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     return _lowest_joined(cKDTree(vertices).query_pairs(tol, output_type="ndarray"), len(vertices))
 
 
-def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.ndarray, curved: bool = True):
+def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.ndarray,
+           curved: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Halve every edge of the ``mark``ed faces (red-green refinement): a marked face becomes
     four; a face with two or three of its edges halved becomes four too (repeated until none is
     left), one with a single halved edge two, so no edge is halved on one side alone. Edges are
@@ -91,43 +92,52 @@ def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.nda
     else at the edge's middle. Returns (vertices, faces, uv), the old vertices first."""
     rep = weld(vertices)
     corners = [faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]
-    keys = [np.sort(rep[c], axis=1) for c in corners]
-    uniq, inverse = np.unique(np.concatenate(keys), axis=0, return_inverse=True)
-    inverse = inverse.reshape(3, -1).T  # (F, 3): each face's edges among ``uniq``
-    red, halved = np.asarray(mark, bool).copy(), np.zeros(len(uniq), bool)
-    while True:
-        halved[inverse[red].ravel()] = True
-        more = ~red & (halved[inverse].sum(1) >= 2)
-        if not more.any():
-            break
-        red |= more
-    cut = halved[inverse]  # (F, 3) which of each face's edges is halved
-    pairs = np.concatenate([c[cut[:, k]] for k, c in enumerate(corners)])
-    pairs, mid = np.unique(np.sort(pairs, axis=1), axis=0, return_inverse=True)
-    n = len(vertices)
+    red, halved = _red(np.asarray(mark, bool), [np.sort(rep[c], axis=1) for c in corners])
+    pairs, mid = np.unique(np.sort(np.concatenate([c[halved[:, k]] for k, c in enumerate(corners)]), axis=1),
+                           axis=0, return_inverse=True)
     middle = vertices[pairs].mean(1)
     if curved:
         normal = _welded_normals(vertices, faces, rep)
         a, b = vertices[pairs[:, 0]], vertices[pairs[:, 1]]
         na, nb = normal[pairs[:, 0]], normal[pairs[:, 1]]
-        middle = middle - (np.einsum("ij,ij->i", b - a, na)[:, None] * na
-                           + np.einsum("ij,ij->i", a - b, nb)[:, None] * nb) / 8
-    out_v = np.concatenate([vertices, middle])
-    out_uv = np.concatenate([uv, uv[pairs].mean(1)])
-    m, start = np.full(faces.shape, -1), 0  # each face's midpoint on each edge, in ``pairs``' order
+        middle -= (np.einsum("ij,ij->i", b - a, na)[:, None] * na + np.einsum("ij,ij->i", a - b, nb)[:, None] * nb) / 8
+    news, start = np.full(faces.shape, -1), 0  # each face's new point on each of its edges, in ``pairs``' order
     for k in range(3):
-        m[cut[:, k], k] = n + mid.ravel()[start:start + cut[:, k].sum()]
-        start += cut[:, k].sum()
+        count = int(halved[:, k].sum())
+        news[halved[:, k], k] = len(vertices) + mid.ravel()[start:start + count]
+        start += count
+    return (np.concatenate([vertices, middle]), _split_faces(faces, news, red, halved),
+            np.concatenate([uv, uv[pairs].mean(1)]))
+
+
+def _red(mark: np.ndarray, keys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The faces to split in four (``mark`` and those with two or more halved edges, until none
+    is left) and which of each face's three edges is halved; ``keys``: each corner pair's edge
+    as its welded ends, sorted."""
+    uniq, inverse = np.unique(np.concatenate(keys), axis=0, return_inverse=True)
+    inverse = inverse.reshape(3, -1).T  # (F, 3): each face's edges among ``uniq``
+    red, halved = mark.copy(), np.zeros(len(uniq), bool)
+    while True:
+        halved[inverse[red].ravel()] = True
+        more = ~red & (halved[inverse].sum(1) >= 2)
+        if not more.any():
+            return red, halved[inverse]
+        red |= more
+
+
+def _split_faces(faces: np.ndarray, news: np.ndarray, red: np.ndarray, halved: np.ndarray) -> np.ndarray:
+    """``faces`` with each ``red`` one in four (its corners and ``news``, its edges' new points)
+    and each with one halved edge in two, winding kept."""
     a, b, c = faces.T
-    ab, bc, ca = m.T
+    ab, bc, ca = news.T
     four = np.stack([np.stack([a, ab, ca], 1), np.stack([ab, b, bc], 1), np.stack([ca, bc, c], 1),
                      np.stack([ab, bc, ca], 1)], 1)[red].reshape(-1, 3)
-    one = ~red & cut.any(1)
-    k = np.argmax(cut[one], axis=1)  # the halved edge: rotate it to the front, then split it
-    f1, m1 = faces[one], m[one, k]
+    one = ~red & halved.any(1)
+    k = np.argmax(halved[one], axis=1)  # the halved edge: rotate it to the front, then split it
+    f1, m1 = faces[one], news[one, k]
     rot = np.stack([f1[np.arange(len(k)), (k + j) % 3] for j in range(3)], 1)
     two = np.concatenate([np.stack([rot[:, 0], m1, rot[:, 2]], 1), np.stack([m1, rot[:, 1], rot[:, 2]], 1)])
-    return out_v, np.concatenate([faces[~red & ~one], four, two]), out_uv
+    return np.concatenate([faces[~red & ~one], four, two])
 
 
 def _welded_normals(vertices: np.ndarray, faces: np.ndarray, rep: np.ndarray) -> np.ndarray:
