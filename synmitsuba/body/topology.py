@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synmitsuba.geometry import unique_rows
+from synmitsuba.geometry import unique_rows, vertex_normals
 
 
 @dataclass
@@ -97,7 +97,7 @@ def refine(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, mark: np.nda
                            axis=0, return_inverse=True)
     middle = vertices[pairs].mean(1)
     if curved:
-        normal = _welded_normals(vertices, faces, rep)
+        normal = vertex_normals(vertices, rep[faces])[rep]  # a seam's copies of a point share theirs
         a, b = vertices[pairs[:, 0]], vertices[pairs[:, 1]]
         na, nb = normal[pairs[:, 0]], normal[pairs[:, 1]]
         middle -= (np.einsum("ij,ij->i", b - a, na)[:, None] * na + np.einsum("ij,ij->i", a - b, nb)[:, None] * nb) / 8
@@ -138,16 +138,6 @@ def _split_faces(faces: np.ndarray, news: np.ndarray, red: np.ndarray, halved: n
     rot = np.stack([f1[np.arange(len(k)), (k + j) % 3] for j in range(3)], 1)
     two = np.concatenate([np.stack([rot[:, 0], m1, rot[:, 2]], 1), np.stack([m1, rot[:, 1], rot[:, 2]], 1)])
     return np.concatenate([faces[~red & ~one], four, two])
-
-
-def _welded_normals(vertices: np.ndarray, faces: np.ndarray, rep: np.ndarray) -> np.ndarray:
-    """Unit area-weighted vertex normals, a seam's copies of a point sharing theirs."""
-    face_n = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]])
-    acc = np.zeros_like(vertices)
-    for k in range(3):
-        np.add.at(acc, rep[faces[:, k]], face_n)
-    acc = acc[rep]
-    return acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-12)
 
 
 def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, tol: float) -> np.ndarray:
