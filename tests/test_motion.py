@@ -321,6 +321,35 @@ def test_motion_preview_cli_writes_a_strip(tmp_path):
     assert img[..., 0].std() > 5  # not a blank picture
 
 
+
+def test_motion_preview_both_rows_skinned_as_cloth_skinned_builds_them(tmp_path, monkeypatch):
+    """``--cloth both``: its skinned row is the subject ``cloth: skinned`` builds (trouser legs cut
+    for skinning), not the simulated subject's finer legs skinned; the other row is the simulated
+    subject with its cloth. The simulation is stubbed out: only which subject each row shows counts."""
+    import dataclasses
+
+    import synmitsuba as sm
+    from synmitsuba.cli import main, motion as cli_motion
+
+    class Stub:
+        def at(self, f):
+            return None
+
+    shown, figure = [], cli_motion._figure_scene
+    monkeypatch.setattr(sm, "simulate_cloth", lambda human, motion: Stub())
+    monkeypatch.setattr(cli_motion, "_figure_scene",
+                        lambda motion, f, human=None, cloth=None: shown.append((human, cloth)) or figure(motion, f, human))
+    assert main(["motion", "preview", "walk", "--out", str(tmp_path), "--frames", "1", "--res", "24x32", "--spp", "1",
+                 "--seconds", "0.2", "--outfit", "tshirt,trousers", "--cloth", "both", "--seed", "3"]) == 0
+    (top, no_cloth), (bottom, stub) = shown
+    assert no_cloth is None and isinstance(stub, Stub)
+    assert (top.recipe.cloth, bottom.recipe.cloth) == ("skinned", "simulated")
+    assert dataclasses.replace(top.recipe, cloth="simulated") == bottom.recipe
+    skinned = sm.build_subject(top.recipe)
+    legs = [[g.vertices for g in h.garments if g.params.kind == "trousers"][0] for h in (top, skinned, bottom)]
+    assert np.array_equal(legs[0], legs[1])
+    assert len(legs[2]) > 1.5 * len(legs[0])  # the simulated subject's legs are cut finer
+
 CMU_TREE = [  # name, parent, offset in CMU units (~5.6 cm), T-pose
     ("Hips", None, (0, 0, 0)), ("LHipJoint", "Hips", (0, 0, 0)), ("LeftUpLeg", "LHipJoint", (1.6, -1.7, 0.8)),
     ("LeftLeg", "LeftUpLeg", (0, -7.5, 0)), ("LeftFoot", "LeftLeg", (0, -7.4, 0)), ("LeftToeBase", "LeftFoot", (0, -0.4, 2.2)),

@@ -7,6 +7,7 @@ retargeted onto a sampled subject, or shown as a stick figure (``--stick``) on i
 from __future__ import annotations
 
 import copy
+import dataclasses
 import os
 
 import numpy as np
@@ -45,19 +46,24 @@ def preview(args) -> int:
     rng = np.random.default_rng(args.seed)
     again = copy.deepcopy(rng)  # the same clip once more, its feet rolling as the subject's heels let them
     motion = load_motion(args.clip, rng, seconds=args.seconds, field="CLIP")
-    human, rows = None, [None]
+    rows = [(None, None)]  # (subject, its simulated cloth or None: skinned)
     if not args.stick:
-        human = sm.build_subject(sm.sample_subject(rng, config))
+        recipe = sm.sample_subject(rng, config)
+        human = sm.build_subject(recipe)
         if human.heels and kind == "procedural":  # a file's clip has no roll to scale: not read twice
             motion = load_motion(args.clip, again, seconds=args.seconds, field="CLIP", roll=heeled_roll(human.heels))
         motion = retarget_to_subject(motion, human)
         simulated = sm.simulate_cloth(human, motion) if args.cloth != "skinned" else None
-        rows = {"skinned": [None], "simulated": [simulated], "both": [None, simulated]}[args.cloth]
+        # the skinned row as ``cloth: skinned`` builds it: its garments cut for skinning (a simulated
+        # skirt's flare and trousers' legs are cut finer), not the simulated subject's skinned
+        skinned = human if args.cloth == "skinned" else sm.build_subject(dataclasses.replace(recipe, cloth="skinned"))
+        rows = {"skinned": [(human, None)], "simulated": [(human, simulated)],
+                "both": [(skinned, None), (human, simulated)]}[args.cloth]
     frames = np.linspace(0, motion.n_frames - 1, args.frames).round().astype(int)
     pelvis = motion.joint_positions()[:, 0]
     height = float(motion.skeleton.rest_positions[:, 1].max()) + 0.15
     images = []
-    for cloth in rows:
+    for human, cloth in rows:
         for f in frames:
             centre = np.array([pelvis[f, 0], 0.5 * height, pelvis[f, 2]])  # follow the subject
             cam = sm.Camera.look_at(eye=centre + [3.6 * height / 1.8, 0.3, 1.8 * height / 1.8], target=centre,
