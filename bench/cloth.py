@@ -2,7 +2,8 @@
 
 Each subject wears a skirt or a dress (alternately; with a t-shirt under a skirt), or with
 ``--garments tshirt`` (``longsleeve``) a t-shirt (long sleeve) over trousers (both simulated, the
-top against the trousers as simulated), or with ``trousers`` the trousers under a t-shirt, built once
+top against the trousers as simulated), or with ``trousers`` the trousers under a t-shirt, or with
+``coat`` a coat over a long sleeve (skinned) and trousers (simulated before it), built once
 for simulation (``cloth: simulated``: its skirt ``SIMULATED_DENSITY`` times finer each way) and
 once skinned (``cloth: skinned``, today's mesh), and put through each motion; per clip the cloth
 stage simulates the garment (``synmitsuba.simulate_cloth``) and, on the same frames, the skinned
@@ -84,8 +85,10 @@ def inside(points, body, faces) -> tuple[float, float]:
 INNER = ("tshirt", "longsleeve")  # worn with a skirt, a top is tucked in: it ends 3 cm below the waist
 # what each measured garment is worn with, and which of that is under it (the garment-against-garment goal)
 OUTFITS = {"skirt": ["tshirt", "skirt"], "dress": ["dress"], "tshirt": ["tshirt", "trousers"],
-           "longsleeve": ["longsleeve", "trousers"], "trousers": ["tshirt", "trousers"]}
-UNDER = {"skirt": INNER, "dress": (), "tshirt": ("trousers",), "longsleeve": ("trousers",), "trousers": ()}
+           "longsleeve": ["longsleeve", "trousers"], "trousers": ["tshirt", "trousers"],
+           "coat": ["longsleeve", "trousers", "coat"]}
+UNDER = {"skirt": INNER, "dress": (), "tshirt": ("trousers",), "longsleeve": ("trousers",), "trousers": (),
+         "coat": ("trousers",)}
 ARMS = ("upperarm", "lowerarm", "hand")
 
 
@@ -262,7 +265,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
     ap.add_argument("--garments", default="skirt,dress",
                     help="skirt and dress: only the subjects wearing these (alternate subjects; skirt: the layered "
-                         "ones); tshirt, longsleeve (over trousers), trousers (under a t-shirt): every subject wears them in turn")
+                         "ones); tshirt, longsleeve (over trousers), trousers (under a t-shirt), coat (over a long sleeve "
+                         "and trousers): every subject wears them in turn")
     ap.add_argument("--summarize", nargs="+", help="print the summary of these rows files and stop")
     ap.add_argument("--start-at-rest", action="store_true",
                     help="start the cloth at rest when the clip starts (as before it took its held part's velocity)")

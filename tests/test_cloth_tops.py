@@ -42,16 +42,16 @@ def tee_walk():
 @pytest.mark.parametrize("outfit, order, hanging", [
     (("tshirt", "trousers"), [["trousers"], ["tshirt"]], ["trousers", "tshirt"]),
     (("tshirt", "skirt"), [["skirt"]], ["skirt"]),
-    (("longsleeve", "trousers", "coat"), [["trousers"]], ["trousers"]),
+    (("longsleeve", "trousers", "coat"), [["trousers"], ["coat"]], ["trousers", "coat"]),
     (("tshirt", "shorts", "jacket"), [["shorts"], ["jacket"]], ["shorts", "jacket"]),
     (("shirt", "shorts", "jacket"), [["shorts"], ["jacket"]], ["jacket"]),
     (("tshirt", "skirt", "blazer"), [["skirt"], ["blazer"]], ["skirt", "blazer"]),
     (("dress",), [["dress"]], ["dress"]),
     (("jumpsuit",), [["jumpsuit"]], ["jumpsuit"])])
 def test_a_top_is_simulated_only_with_nothing_worn_over_it_and_after_what_is_under_it(outfit, order, hanging):
-    """A top tucked into a skirt, or under a jacket, stays skinned: its free hem would pass
-    through the skinned garment over it; a coat is not simulated. Trousers, shorts and skirts
-    are, first; a top, jacket or blazer over them after, against their simulated cloth. Shorts
+    """A top tucked into a skirt, or under a jacket or coat, stays skinned: its free hem would
+    pass through the skinned garment over it. Trousers, shorts and skirts are simulated first; a
+    top, jacket, blazer or coat over them after, against their simulated cloth. Shorts
     under a skinned shirt that reaches past them (held down to under its end) stay skinned. A
     jumpsuit hangs from its seat, as trousers do."""
     human = _subject(*outfit)
@@ -189,6 +189,29 @@ def test_a_jackets_collider_holds_the_skinned_top_and_trousers_under_it_closed()
 
 
 
+def test_a_coat_hangs_its_parted_skirt_over_the_skinned_top_and_the_simulated_trousers():
+    """A coat is simulated after the trousers, over them and the skinned long sleeve (both in its
+    collider, capped), held down through its skirt's top 12 cm and at its cuffs; the rest of its
+    skirt hangs, and is open down the front (a weld of its particles leaves the slit)."""
+    from synmitsuba.body.garments import open_edges
+    human = _subject("longsleeve", "trousers", "coat")
+    clip = _walk(human, 0.2)
+    (g,), collider = cloth_inputs(human, clip, ClothSettings(), ["coat"])
+    assert g.piece.fabric.density > 0.4  # coat wool: the heaviest cloth but leather
+    v = collider.at(2)[0]
+    parts = _collider_parts(collider.faces, collider.slippery, len(v), collider.body_count)
+    meshes = [trimesh.Trimesh(p.place(v), p.faces, process=False) for p in parts]
+    assert all(m.is_watertight and m.is_winding_consistent and m.volume > 0 for m in meshes)
+    rest = human.parts[g.part].rest[g.rows]
+    hip = human.regions.hip_y
+    assert g.piece.held[rest[:, 1] > hip - 0.11].all()
+    skirt = rest[:, 1] < hip - 0.16
+    assert not g.piece.held[skirt & (np.abs(rest[:, 0]) < 0.12)].any()  # between the hands: nothing holds it
+    ends = np.unique(open_edges(g.piece.faces, np.arange(len(rest))))
+    front = ends[skirt[ends] & (rest[ends, 2] > np.median(rest[skirt, 2])) & (np.abs(rest[ends, 0]) < 0.02)]
+    assert np.ptp(rest[front, 1]) > 0.2  # the slit, up from the hem
+
+
 def test_a_jacket_is_set_out_of_each_garment_under_it():
     """Issue 34's garment-against-garment goal for a jacket over a t-shirt over trousers: the
     skinned jacket (deep inside the t-shirt, pushed by skinning's resolve) run through the
@@ -221,19 +244,23 @@ def test_a_jacket_is_set_out_of_each_garment_under_it():
     assert before > 100 and after < before / 20, (before, after)
 
 
-def test_trousers_hang_from_the_seat_and_under_a_coat_from_its_hem():
+def test_trousers_hang_from_the_seat_and_under_a_skinned_top_from_its_end():
     """Trousers are held from the crotch up (the seat, and the crotch where free leg tubes would
-    be pinched between the thighs), their legs free. Under a coat, which stays skinned, they are
-    held down to ``COVER`` under its hem (its lowest vertex, at the knees): no free cloth under
-    its skinned skirt."""
+    be pinched between the thighs), their legs free. Under a skinned garment that reaches lower
+    (a long sleeve kept skinned under a coat) they are held down to ``COVER`` under its end (its
+    lowest vertex over the torso): no free cloth under skinned cloth. A coat, simulated after them
+    and over them, holds nothing: their legs hang under its skirt."""
+    from scipy.spatial import cKDTree
     for outfit in (("tshirt", "trousers"), ("longsleeve", "trousers", "coat")):
         human = _subject(*outfit)
         (g,) = simulated_garments(human, ["trousers"])
         y = human.parts[g.part].rest[g.rows][:, 1]
         top = human.regions.crotch_y
         if "coat" in outfit:
-            top = min(top, human.parts[_part(human, "coat")].rest[:, 1].min() - COVER)
-            assert top < human.regions.crotch_y - 0.2  # the coat reaches the knees
+            sleeve = human.parts[_part(human, "longsleeve")].rest
+            over = np.isin(human.regions.group[cKDTree(human.body.vertices).query(sleeve)[1]], ["torso", "upperleg"])
+            top = min(top, sleeve[over, 1].min() - COVER)
+            assert top > human.parts[_part(human, "coat")].rest[:, 1].min() + 0.2  # not the coat's hem, at the knees
         assert g.piece.held[y >= top].all()
         assert not g.piece.held[y < top - 0.01].any()
         assert 0.2 < (~g.piece.held).mean() < 0.9

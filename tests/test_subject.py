@@ -1442,6 +1442,34 @@ def test_a_straight_cut_is_vented_up_the_centre_back_and_no_other_cut_opens(huma
         assert (sides != 0).all() and sides.sum() == 0, name  # both edges, apart
 
 
+def test_a_coats_skirt_is_parted_down_the_front_under_its_top_ring(human):
+    """A coat's skirt (``shell+parted``) is open down the centre front from its hem to under its
+    top ring, its two edges apart (so the cloth stage's weld leaves it open: closed, a run's
+    stride bunched it at the hips), and besides its waist and hem open only at its back vent."""
+    from synmitsuba.body.garments import GARMENT_SHAPES, GARMENTS, VENT_GAP, GarmentParams, _flare, open_edges
+    from synmitsuba.body.topology import weld
+    r = human.regions
+    g = GarmentParams(kind="coat", ease=0.01, length=0.5, cut="straight")
+    closed = _flare(human.body, r, g, 0.02, r.hip_y)[0]
+    v, f, _ = _flare(human.body, r, g, 0.02, r.hip_y, parted=True)
+    coat = GARMENT_SHAPES[GARMENTS["coat"].shape].build(human.body, r, human.split, g, g, 0.02)[0]
+    assert np.array_equal(coat[len(coat) - len(v):], v)  # the coat's skirt is this one
+    ends = np.unique(open_edges(f, weld(v)))
+    top, hem = v[:, 1].max(), v[:, 1].min()
+    slit = ends[(v[ends, 1] > hem + 1e-9) & (v[ends, 1] < top - 1e-9)]
+    back = np.unique(open_edges(f, weld(closed)))
+    back = back[(closed[back, 1] > hem + 1e-9) & (closed[back, 1] < top - 1e-9)]
+    centre = v[:, [0, 2]].mean(0)
+    front = slit[v[slit, 2] > centre[1]]
+    assert len(slit) == len(front) + len(back) and len(back)  # the vent's as before, the rest at the front
+    assert (np.abs(v[front, 0] - centre[0]) < 0.01).all()
+    spacing = (top - hem) / 13
+    assert abs(v[front, 1].max() - (top - spacing)) < 1e-9  # up to the ring under the top one
+    assert len(front) == 2 * 12  # two edges of the 12 rings between the top ring and the hem
+    pairs = v[front[np.lexsort((v[front, 0], v[front, 1]))]].reshape(12, 2, 3)  # each ring's two edges
+    assert np.allclose(pairs[:, 1, 0] - pairs[:, 0, 0], 2 * VENT_GAP) and np.allclose(pairs[:, 0, 1:], pairs[:, 1, 1:])
+
+
 def test_every_skirt_cut_has_its_folds_and_flare(human):
     """Each cut's rest skirt ring by ring: round the hem, the radius's harmonic at the cut's
     fold count has the amplitude its wave gives (a zigzag's first harmonic is 8/pi^2 of its

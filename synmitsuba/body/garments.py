@@ -164,9 +164,9 @@ def _feet(g, r, v):
 class GarmentKind:
     """Everything a garment kind is. ``shape``: ``shell`` (the region offset from the body),
     ``legs`` (a shell whose legs hang as tubes: ``hang_legs``), ``flare`` (a skirt surface from
-    the waist), ``shell+flare`` (a dress: bodice + skirt) or ``hull`` (convex hull of the
-    region, for shoes). ``order``: dressing order, lower goes on
-    first and higher kinds sit outside it (shoes are separate): bottoms 1 (a top hangs over
+    the waist), ``shell+flare`` (a dress: bodice + skirt; ``shell+parted``, a coat's, its skirt
+    open down the front) or ``hull`` (convex hull of the region, for shoes). ``order``: dressing
+    order, lower goes on first and higher kinds sit outside it (shoes are separate): bottoms 1 (a top hangs over
     them), tops and dresses 2, a skirt 3 (over the top tucked into it), jackets and coats 4."""
 
     layer: Layer
@@ -202,7 +202,7 @@ GARMENTS: dict[str, GarmentKind] = {
     "sweater": GarmentKind(Layer.TOP, 0.018, 2, "shell", _top(lambda L: 0.92 + 0.06 * L), (0.45, 0.8),
                            (0.01, 0.03), (0.004, 0.008), fabric="jersey", panels="top"),
     # a long coat: a jacket's bodice to the hips and a skirt from them to the knees (skinned to both legs)
-    "coat": GarmentKind(Layer.TOP, 0.025, 4, "shell+flare", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
+    "coat": GarmentKind(Layer.TOP, 0.025, 4, "shell+parted", _open_front(_top(lambda L: 0.95, dress=True)), (0.35, 0.65),
                         (0.005, 0.02), (0.004, 0.01), fabric="twill", cut="straight", panels="dress"),
     "hoodie": GarmentKind(Layer.TOP, 0.016, 2, "shell+hood", _top(lambda L: 0.95 + 0.05 * L), (0.45, 0.8),
                           (0.01, 0.03), (0.003, 0.006), fabric="jersey", prints=True, panels="top"),
@@ -570,11 +570,13 @@ def _folds(cut: SkirtCut, ang: np.ndarray, t: float) -> np.ndarray:
     return 0.5 * cut.depth * t * wave
 
 
-def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, density: int = 1):
+def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, density: int = 1,
+           parted: bool = False):
     """A skirt surface from top_y down, widening outwards by its cut (``SKIRT_CUTS``), outside
     every body vertex it passes; ``density`` times the rings down and the points round (a
     simulated skirt's folds need them), but not for sharp pleats: finer, their creases were
-    softer and a walk opened them (down to 40 % of their depth; tests/test_cloth.py asks 45 %)."""
+    softer and a walk opened them (down to 40 % of their depth; tests/test_cloth.py asks 45 %).
+    ``parted``: open down the centre front under its top ring (``_parted``)."""
     cut = SKIRT_CUTS[g.cut or GARMENTS[g.kind].cut or "a_line"]
     density = 1 if cut.sharp else density
     n_seg = density * (48 if not cut.folds else 6 * cut.folds)  # six points a fold
@@ -612,10 +614,25 @@ def _flare(body, r: BodyRegions, g: GarmentParams, offset: float, top_y: float, 
     # the seam's own copies: a face closing the ring ran its uv back across the whole square
     verts, faces, uv = (np.concatenate([verts, verts[::n_seg]]), np.array(quads),
                         np.concatenate([uv, np.column_stack([np.ones(len(heights)), v_of])]))
+    if parted:
+        verts = _parted(verts, len(heights), n_seg)
     return _vented(verts, faces, uv, heights, n_seg, cut.vent) if cut.vent > 0 else (verts, faces, uv)
 
 
 VENT_GAP = 0.001  # metres each edge of a vent stands off the centre-back line: apart, so no weld closes it
+
+
+def _parted(verts: np.ndarray, n_rings: int, n_seg: int) -> np.ndarray:
+    """A ``_flare`` surface open down the centre front under its top ring, as a coat is below its
+    buttons: each ring's first point (angle 0, straight ahead) and its seam copy (u = 1, appended
+    after the rings) stood ``VENT_GAP`` off the line either way, so no weld closes the seam there
+    (closed, a coat's straight skirt rode up a run's stride and stayed bunched at the hips)."""
+    verts = verts.copy()
+    rings = np.arange(1, n_rings)
+    tangent = np.array([1.0, 0.0, 0.0])  # d(sin a, 0, cos a)/da at a = 0: round the ring, away from the seam copy
+    verts[rings * n_seg] += VENT_GAP * tangent
+    verts[n_rings * n_seg + rings] -= VENT_GAP * tangent
+    return verts
 
 
 def _vented(verts: np.ndarray, faces: np.ndarray, uv: np.ndarray, heights: np.ndarray, n_seg: int, vent: float):
@@ -815,12 +832,13 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     return v, f, uv
 
 
-def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float, density: int = 1):
-    """A bodice (a shell) and a skirt flaring from the hips (``density``: see ``_flare``), the
-    skirt's uv squeezed under the bodice's in the atlas (where the legs' would be), so the two
+def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float, density: int = 1,
+                 parted: bool = False):
+    """A bodice (a shell) and a skirt flaring from the hips (``density``, ``parted``: see ``_flare``),
+    the skirt's uv squeezed under the bodice's in the atlas (where the legs' would be), so the two
     share no texel and each can take its own pattern."""
     v, f, uv = _shell_shape(body, r, split, g, cut, offset)
-    sv, sf, suv = _flare(body, r, g, offset, r.hip_y, density)
+    sv, sf, suv = _flare(body, r, g, offset, r.hip_y, density, parted)
     suv = suv * [1.0, max(uv[:, 1].min() - 0.02, 0.1)]
     return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
 
@@ -1014,6 +1032,10 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     "flare": GarmentShape(lambda body, r, split, g, cut, offset, density=1: _flare(body, r, g, offset, r.waist_y, density),
                           weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a), dense=True),
+    # a coat: a dress's shape, its skirt parted down the front (and at one density: wool hangs in few folds)
+    "shell+parted": GarmentShape(lambda body, r, split, g, cut, offset: _dress_shape(body, r, split, g, cut, offset,
+                                                                                   parted=True),
+                                 weights=lambda *a: both_legs_weights(*a)),
     "shell+collar": GarmentShape(_shell_and(_collar)),
     "shell+hood": GarmentShape(_shell_and(_hood)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),

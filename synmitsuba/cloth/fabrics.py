@@ -35,5 +35,6 @@ FABRICS: dict[str, Fabric] = {
     # crease at the knee and stack over the shoe (bench/RESULTS.md, session 94); its bending stiffness over its
     # weight still between jersey's and denim's
     "twill": Fabric(0.25, 1.5e4, 1.5e4, 1.5e-2, 1.0e-1, 2.0e-3, 0.45),
+    "coating": Fabric(0.45, 2.0e4, 2.0e4, 1.5e-2, 3.0e-1, 5.0e-3, 0.5),  # coat wool (melton): heavy, firm
     "leather": Fabric(0.60, 3.0e4, 3.0e4, 2.0e-2, 6.0e-1, 1.0e-2, 0.6),  # holds its shape
 }
