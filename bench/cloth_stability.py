@@ -11,7 +11,7 @@ Clip ``k`` is drawn from ``numpy.random.default_rng(k)``: subjects are sampled a
 clips (``--set``): ``hanging`` (the default, ``bench/cloth_stability.jsonl``) a skirt, dress,
 shift or wrap; ``tops`` (``bench/cloth_stability_tops.jsonl``) anything else the stage
 simulates: a top with nothing worn over it (since session 90), a jacket or blazer (since
-session 91), trousers or shorts (since session 92) (the hanging set's clips are the same clips as
+session 91), trousers or shorts (since session 92), a coat (since session 96) (the hanging set's clips are the same clips as
 before them: a top worn with a skirt is tucked into it; a jacket over a skirt, simulated after it
 since session 92, is not measured there),
 then a procedural motion kind is drawn, retargeted to it and simulated for ``--seconds``
@@ -54,10 +54,11 @@ SAME_CLOTH_SINCE = {"skirt": "ed120b5", "dress": "4dcabac", "shift": "4dcabac", 
 # Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated as today from
 # 6271691, jackets and blazers over trousers or shorts from f177db3 (54b59dd made them clips of the set, so
 # clips drawn before it may be other clips), and over simulated trousers and shorts, which the set counts too, from
-# 06101e1: a set of their own (``--set tops``), logged apart, counted from TOPS_SINCE: a4ebae0, where simulated
-# trousers', shorts' and jumpsuits' legs became twice as fine each way (after e69f74c: trousers, chinos, shorts and
-# jumpsuits as twill; 5b3c83f: their legs as tubes, jumpsuits in the set).
-TOPS_SINCE = "a4ebae0"
+# 06101e1: a set of their own (``--set tops``), logged apart, counted from TOPS_SINCE: 2ac51ce, where coats were
+# simulated (and the trousers under them no longer held down to a coat's hem) (after a4ebae0: simulated trousers',
+# shorts' and jumpsuits' legs twice as fine each way; e69f74c: trousers, chinos, shorts and jumpsuits as twill;
+# 5b3c83f: their legs as tubes, jumpsuits in the set).
+TOPS_SINCE = "2ac51ce"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
