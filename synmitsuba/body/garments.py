@@ -12,6 +12,7 @@ jackets in offset.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import Callable
 
@@ -1033,9 +1034,7 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
                           weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a), dense=True),
     # a coat: a dress's shape, its skirt parted down the front (and at one density: wool hangs in few folds)
-    "shell+parted": GarmentShape(lambda body, r, split, g, cut, offset: _dress_shape(body, r, split, g, cut, offset,
-                                                                                   parted=True),
-                                 weights=lambda *a: both_legs_weights(*a)),
+    "shell+parted": GarmentShape(functools.partial(_dress_shape, parted=True), weights=lambda *a: both_legs_weights(*a)),
     "shell+collar": GarmentShape(_shell_and(_collar)),
     "shell+hood": GarmentShape(_shell_and(_hood)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
