@@ -151,6 +151,30 @@ def test_keep_outside_sets_points_in_or_near_a_sphere_its_margin_out_and_leaves_
     assert np.array_equal(out[~moved], points[~moved])
 
 
+def test_the_push_out_of_a_garment_under_it_never_leaves_a_vertex_inside_the_body():
+    """A body (sphere) and a garment under the cloth (a larger sphere) whose surface runs inside
+    the body: cloth just outside the body but inside that garment is pushed out of the garment,
+    onto its surface inside the body (2 cm in, the coat at a squat's hip crease). The stage's
+    push-out ends with the body: every vertex outside it (winding number), the margin off it,
+    the points outside both returned bit for bit."""
+    from synmitsuba.cloth.simulate import _outside_body
+    body, inner = trimesh.creation.icosphere(subdivisions=4, radius=0.2), \
+        trimesh.creation.icosphere(subdivisions=4, radius=0.5)
+    vb, fb = np.asarray(body.vertices), np.asarray(body.faces)
+    vi, fi = np.asarray(inner.vertices) + [0.68, 0.0, 0.0], np.asarray(inner.faces) + len(vb)
+    v = np.concatenate([vb, vi])
+    rng = np.random.default_rng(5)
+    near = [0.203, 0.0, 0.0] + rng.uniform(-0.01, 0.01, (20, 3)) * [0.0, 1.0, 1.0]  # outside the body, in the garment
+    free = [-0.25, 0.0, 0.0] + rng.uniform(-0.02, 0.02, (10, 3))  # outside both
+    cloth = np.concatenate([near, free])
+    collider = Collider(np.concatenate([fb, fi]), lambda f: (v, cloth), 30.0, 1, body_count=len(fb), inner=(fi,))
+    margin = ClothSettings().particle_radius / 2
+    out = _outside_body({"coat": cloth[None].copy()}, collider, ClothSettings())["coat"][0]
+    assert (winding_numbers(vb, fb, out) < 0.5).all()
+    assert (point_triangle_distances(out, vb[fb]).min(1) > 0.99 * margin).all()
+    assert np.array_equal(out[len(near):], free)
+
+
 def test_a_waist_seal_keeps_what_rose_inside_the_band_under_it_in_the_moved_waists_frame():
     """A cylinder "body" and an elliptic band (held) round it, moved by a known rotation and
     shift: a free particle inside the band's bottom ring and above it ends ``SEAL_GAP`` under

@@ -361,7 +361,8 @@ def simulate_cloth(human, motion, settings: ClothSettings | None = None) -> Clot
 
 def _outside_body(frames: dict, collider: Collider, s: ClothSettings) -> dict:
     """Every garment vertex, held and hem band too, out of the body at each frame by half the
-    particle radius (``outside.keep_outside``: the whole body mesh, not the nearest vertices')."""
+    particle radius (``outside.keep_outside``: the whole body mesh, not the nearest vertices'),
+    then out of each garment worn under it, then (if any was) out of the body again."""
     from synmitsuba.cloth.outside import keep_outside
     inner = [_capped(faces, 1.0) for faces in collider.inner]
     for f in range(collider.n_frames):
@@ -374,6 +375,11 @@ def _outside_body(frames: dict, collider: Collider, s: ClothSettings) -> dict:
             # 18 mm inside the t-shirt (bench/RESULTS.md, session 91)
             for part in inner * min(len(inner), 2):
                 v[f] = keep_outside(part.place(body), part.faces, v[f], s.particle_radius / 2)
+            # and out of the body last: where a garment under it runs into the body (the trousers at a squat's
+            # hip crease) the push out of that garment ended inside the body: a coat's vertex 10 mm inside
+            # the belly (bench/RESULTS.md, session 97). The body wins: the garment under it is inside there too
+            if inner:
+                v[f] = keep_outside(body, collider.body_faces, v[f], s.particle_radius / 2)
     return frames
 
 
