@@ -96,8 +96,12 @@ def under(points, inner, faces, skip) -> tuple[float, float]:
     """(share of ``points``, an outer garment's, under an inner garment's surface, deepest
     metres): the closest point on its triangles, sign from that triangle's normal (the garment's
     outside), for points within 3 cm; not where the closest triangle is one of ``skip`` (those
-    that touch its open edges: past a hem or a waist nothing is covered)."""
+    that touch its open edges: past a hem or a waist nothing is covered), nor outside the inner
+    garment closed (each opening fanned; winding number): where it folds over itself (trousers
+    at a squat's hip) the closest triangle can face away from a point outside it (a held coat
+    vertex "29 mm under" them, outside their volume; bench/RESULTS.md, session 97)."""
     import trimesh
+    from reference import closed_shell, winding_numbers
     from scipy.spatial import cKDTree
     d, _ = cKDTree(inner).query(points)
     near = np.flatnonzero(d < 0.03)
@@ -113,6 +117,8 @@ def under(points, inner, faces, skip) -> tuple[float, float]:
     tri, dist, closest = cand[rows, best], dists[rows, best], c.reshape(*cand.shape, 3)[rows, best]
     below = np.einsum("ij,ij->i", p - closest, mesh.face_normals[tri]) < 0
     hit = below & ~skip[tri]
+    if hit.any():
+        hit[hit] = winding_numbers(*closed_shell(inner, faces), p[hit]) > 0.5
     return float(hit.sum()) / len(points), float(dist[hit].max()) if hit.any() else 0.0
 
 
@@ -204,15 +210,19 @@ def hem_lag_ms(hem: np.ndarray, body: np.ndarray, fps: float) -> float:
     return 1000.0 * lag / fps
 
 
-def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, surfaces: dict) -> dict:
+def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, surfaces: dict,
+                  keep: str | None = None) -> dict:
     """One clip's measures: ``humans``/``surfaces`` hold the subject built for simulation
     ("sim", its finer skirt) and as skinned ("skinned", today's mesh); "same_mesh" is the sim
-    subject's own garment skinned (a stricter comparison for the folds)."""
+    subject's own garment skinned (a stricter comparison for the folds). ``keep``: a .npz path
+    the simulated garments' vertices per frame are saved to (to measure them again)."""
     human = humans["sim"]
     clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=seconds), human.skeleton)
     t = time.perf_counter()
     track = sm.simulate_cloth(human, clip)
     sim_s = time.perf_counter() - t
+    if keep:
+        np.savez_compressed(keep, **track.frames)
     settle = int(round(sm.ClothSettings().settle_s * clip.fps))
     kinds = ("sim", "skinned", "same_mesh")
     out: dict = {k: {"inside": [], "deepest": [], "folds": [], "rise": [], "under": [], "under_deepest": [], "sleeve": [],
@@ -263,6 +273,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--cold-cache", action="store_true", help="compile Warp's kernels afresh (a temporary cache)")
     ap.add_argument("--first", type=int, default=0, help="the first subject (seed 100 + first): split a run over processes")
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
+    ap.add_argument("--tracks", help="save each clip's simulated garments here (SEED_GARMENT_MOTION.npz)")
     ap.add_argument("--garments", default="skirt,dress",
                     help="skirt and dress: only the subjects wearing these (alternate subjects; skirt: the layered "
                          "ones); tshirt, longsleeve (over trousers), trousers (under a t-shirt), coat (over a long sleeve "
@@ -293,7 +304,8 @@ def main(argv=None) -> dict:
         humans = {"sim": sm.build_subject(recipe), "skinned": sm.build_subject(replace(recipe, cloth="skinned"))}
         surfaces = {k: Surface(h, garment) for k, h in humans.items()}
         for motion in args.motions.split(","):
-            r = clip_measures(sm, humans, garment, motion, args.seconds, surfaces)
+            keep = os.path.join(args.tracks, f"{100 + i}_{garment}_{motion}.npz") if args.tracks else None
+            r = clip_measures(sm, humans, garment, motion, args.seconds, surfaces, keep)
             first_s = r["sim_s"] if first_s is None else first_s
             rows.append({"subject": i, "garment": garment, "motion": motion, **r})
             print(json.dumps(rows[-1]), file=sys.stderr, flush=True)

@@ -119,3 +119,24 @@ def pattern_jacobians(P: np.ndarray, C: np.ndarray, covered: np.ndarray) -> tupl
     Cm = np.stack([Cu[ok], Cv[ok]], -1)
     good = np.abs(np.linalg.det(Cm)) > 1e-14
     return np.stack([Pu[ok], Pv[ok]], -1)[good] @ np.linalg.inv(Cm[good]), P[:-1, :-1][ok][good]
+
+
+def closed_shell(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A garment made a closed surface: vertices welded by position, each opening (a connected
+    loop of edges one face has) fanned to its centroid."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    _, first, inv = np.unique(np.round(vertices, 6), axis=0, return_index=True, return_inverse=True)
+    v, f = vertices[first], inv.ravel()[faces]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
+    directed = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    _, k, counts = np.unique(np.sort(directed, 1), axis=0, return_inverse=True, return_counts=True)
+    open_ = directed[counts[k.ravel()] == 1]
+    graph = coo_matrix((np.ones(len(open_)), (open_[:, 0], open_[:, 1])), shape=(len(v), len(v)))
+    _, label = connected_components(graph, directed=False)
+    caps, extra = [], []
+    for lab in np.unique(label[open_[:, 0]]):
+        edges = open_[label[open_[:, 0]] == lab]
+        extra.append(v[np.unique(edges)].mean(0))
+        caps.append(np.column_stack([edges[:, 1], edges[:, 0], np.full(len(edges), len(v) + len(extra) - 1)]))
+    return np.concatenate([v, extra]), np.concatenate([f, *caps])
