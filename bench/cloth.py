@@ -44,6 +44,7 @@ import sys
 import tempfile
 import time
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -92,14 +93,17 @@ UNDER = {"skirt": INNER, "dress": (), "tshirt": ("trousers",), "longsleeve": ("t
 ARMS = ("upperarm", "lowerarm", "hand")
 
 
-def under(points, inner, faces, skip) -> tuple[float, float]:
+def under(points, inner, faces, skip, body=None) -> tuple[float, float]:
     """(share of ``points``, an outer garment's, under an inner garment's surface, deepest
     metres): the closest point on its triangles, sign from that triangle's normal (the garment's
     outside), for points within 3 cm; not where the closest triangle is one of ``skip`` (those
     that touch its open edges: past a hem or a waist nothing is covered), nor outside the inner
     garment closed (each opening fanned; winding number): where it folds over itself (trousers
     at a squat's hip) the closest triangle can face away from a point outside it (a held coat
-    vertex "29 mm under" them, outside their volume; bench/RESULTS.md, session 97)."""
+    vertex "29 mm under" them, outside their volume; bench/RESULTS.md, session 97), nor inside
+    ``body`` ((vertices, faces), closed), when given: those are ``inside``'s to count, or lie
+    where the body runs into itself (a running thigh into the belly), the garment under them
+    in there too."""
     import trimesh
     from reference import closed_shell, winding_numbers
     from scipy.spatial import cKDTree
@@ -119,6 +123,8 @@ def under(points, inner, faces, skip) -> tuple[float, float]:
     hit = below & ~skip[tri]
     if hit.any():
         hit[hit] = winding_numbers(*closed_shell(inner, faces), p[hit]) > 0.5
+    if hit.any() and body is not None:
+        hit[hit] = winding_numbers(*body, p[hit]) < 0.5
     return float(hit.sum()) / len(points), float(dist[hit].max()) if hit.any() else 0.0
 
 
@@ -211,18 +217,23 @@ def hem_lag_ms(hem: np.ndarray, body: np.ndarray, fps: float) -> float:
 
 
 def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, surfaces: dict,
-                  keep: str | None = None) -> dict:
+                  keep: str | None = None, reuse: bool = False) -> dict:
     """One clip's measures: ``humans``/``surfaces`` hold the subject built for simulation
     ("sim", its finer skirt) and as skinned ("skinned", today's mesh); "same_mesh" is the sim
     subject's own garment skinned (a stricter comparison for the folds). ``keep``: a .npz path
-    the simulated garments' vertices per frame are saved to (to measure them again)."""
+    the simulated garments' vertices per frame (and the simulation's seconds) are saved to, or,
+    with ``reuse``, read from when it is there (measured again, not simulated)."""
     human = humans["sim"]
     clip = sm.retarget(sm.procedural_motion(motion, np.random.default_rng(0), seconds=seconds), human.skeleton)
-    t = time.perf_counter()
-    track = sm.simulate_cloth(human, clip)
-    sim_s = time.perf_counter() - t
-    if keep:
-        np.savez_compressed(keep, **track.frames)
+    if keep and reuse and os.path.exists(keep):
+        saved = dict(np.load(keep))
+        sim_s, track = float(saved.pop("sim_s")), SimpleNamespace(frames=saved)
+    else:
+        t = time.perf_counter()
+        track = sm.simulate_cloth(human, clip)
+        sim_s = time.perf_counter() - t
+        if keep:
+            np.savez_compressed(keep, sim_s=sim_s, **track.frames)
     settle = int(round(sm.ClothSettings().settle_s * clip.fps))
     kinds = ("sim", "skinned", "same_mesh")
     out: dict = {k: {"inside": [], "deepest": [], "folds": [], "rise": [], "under": [], "under_deepest": [], "sleeve": [],
@@ -249,7 +260,7 @@ def clip_measures(sm, humans: dict, garment: str, motion: str, seconds: float, s
                 if kind == "sim" and name in track.frames:  # simulated too (trousers under a top): as simulated
                     top = track.frames[name][f]
                 for key, skip in (("under", edge | sleeve), ("sleeve", edge | ~sleeve)):
-                    share, deep = under(v, top, faces, skip)
+                    share, deep = under(v, top, faces, skip, (body, human.body.faces))
                     out[kind][key].append(share)
                     out[kind][f"{key}_deepest"].append(deep)
     res = {"seconds_per_frame": sim_s / (clip.n_frames + settle), "sim_s": sim_s}
@@ -274,6 +285,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--first", type=int, default=0, help="the first subject (seed 100 + first): split a run over processes")
     ap.add_argument("--rows", help="append each clip's row here (JSON lines)")
     ap.add_argument("--tracks", help="save each clip's simulated garments here (SEED_GARMENT_MOTION.npz)")
+    ap.add_argument("--reuse-tracks", action="store_true", help="measure the clips saved in --tracks again")
     ap.add_argument("--garments", default="skirt,dress",
                     help="skirt and dress: only the subjects wearing these (alternate subjects; skirt: the layered "
                          "ones); tshirt, longsleeve (over trousers), trousers (under a t-shirt), coat (over a long sleeve "
@@ -305,7 +317,7 @@ def main(argv=None) -> dict:
         surfaces = {k: Surface(h, garment) for k, h in humans.items()}
         for motion in args.motions.split(","):
             keep = os.path.join(args.tracks, f"{100 + i}_{garment}_{motion}.npz") if args.tracks else None
-            r = clip_measures(sm, humans, garment, motion, args.seconds, surfaces, keep)
+            r = clip_measures(sm, humans, garment, motion, args.seconds, surfaces, keep, args.reuse_tracks)
             first_s = r["sim_s"] if first_s is None else first_s
             rows.append({"subject": i, "garment": garment, "motion": motion, **r})
             print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
