@@ -294,6 +294,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--start-at-rest", action="store_true",
                     help="start the cloth at rest when the clip starts (as before it took its held part's velocity)")
     args = ap.parse_args(argv)
+    if args.reuse_tracks and not args.tracks:
+        ap.error("--reuse-tracks: no --tracks DIR to read the saved clips from; add --tracks DIR")
     if args.summarize:
         rows = [json.loads(line) for path in args.summarize for line in open(path) if line.strip()]
         return summarize(rows, {"seconds": args.seconds, "cold_cache": False, "first_clip_s": None})
