@@ -1023,7 +1023,8 @@ class GarmentShape:
 # round (a circle skirt 120; pleats as cut) in rings 2 cm apart. At 48 round and 4 cm apart,
 # folds 2-15 cm across hardly fit (bench/cloth.py's fold energy; bench/RESULTS.md). Trouser
 # legs, cut from the body's mesh (edges 2.8 cm in the median, a tenth over 5 cm), are halved
-# the same way under the crotch: 1.5 cm.
+# the same way under the crotch: 1.5 cm. A coat's parted skirt too (since session 98: at one
+# density its walk folded 3.5x the skinned coat's, 14.5x at two; bench/RESULTS.md).
 SIMULATED_DENSITY = 2
 
 # A new garment shape is one entry here; GarmentKind.shape names one.
@@ -1033,8 +1034,9 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     "flare": GarmentShape(lambda body, r, split, g, cut, offset, density=1: _flare(body, r, g, offset, r.waist_y, density),
                           weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
     "shell+flare": GarmentShape(_dress_shape, weights=lambda *a: both_legs_weights(*a), dense=True),
-    # a coat: a dress's shape, its skirt parted down the front (and at one density: wool hangs in few folds)
-    "shell+parted": GarmentShape(functools.partial(_dress_shape, parted=True), weights=lambda *a: both_legs_weights(*a)),
+    # a coat: a dress's shape, its skirt parted down the front
+    "shell+parted": GarmentShape(functools.partial(_dress_shape, parted=True), weights=lambda *a: both_legs_weights(*a),
+                                 dense=True),
     "shell+collar": GarmentShape(_shell_and(_collar)),
     "shell+hood": GarmentShape(_shell_and(_hood)),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
