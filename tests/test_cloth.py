@@ -316,6 +316,27 @@ def test_cloth_starts_the_clip_moving_as_its_held_edge_does():
         assert np.abs(moved[f, :, :2]).max() < 0.003
 
 
+def test_with_self_contact_cloth_keeps_up_with_its_held_edge_at_a_walk():
+    """The same square and move with self-contact on: Newton lets a particle move at most half its
+    (relaxed) self-contact query radius between two detections, and at the query radius the
+    margin alone gave (4.5 mm: 1.9 mm a step) the free cloth fell 3 cm a frame behind its held
+    rows at 1.5 m/s (a pair of trousers was left where the walk began, stretched 1.3 m by frame
+    29; bench/RESULTS.md, session 99). The radius now covers ``max_step``, and a frame has steps
+    enough that the held particles move no more than that in one: every particle within 3 mm of
+    k * 5 cm on at frame k, and out of its plane by no more than that."""
+    n, fps, v = 9, 30.0, np.array([0.0, 0.0, 1.5])
+    q0, faces, held = _hanging_square(n, 0.4, 1.0)
+    sphere = trimesh.creation.icosphere(subdivisions=1, radius=0.1)
+    far = sphere.vertices + [5.0, 0.5, 0.0]
+    collider = Collider(np.asarray(sphere.faces), lambda f: (far, q0 + max(f, 0) * v / fps), fps, 7)
+    q = drape([ClothPiece(faces, held, FABRICS["woven"])], collider,
+              ClothSettings(settle_s=0.3, air=None, self_contact=True), names=["square"])
+    moved = (q - q[0])[:, ~held]
+    for f in range(1, 7):
+        assert np.abs(moved[f, :, 2] - f * v[2] / fps).max() < 0.003, (f, np.abs(moved[f, :, 2] - f * v[2] / fps).max())
+        assert np.abs(moved[f, :, :2]).max() < 0.003
+
+
 def _hanging_square(n: int = 13, side: float = 0.4, top: float = 1.0):
     """A square hanging in the xy plane from its held top row, and its triangles."""
     u = np.linspace(-side / 2, side / 2, n)

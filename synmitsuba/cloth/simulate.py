@@ -81,9 +81,15 @@ class ClothSettings:
     max_stretch: float = spec(0.2, _METRES, doc="metres an edge of cloth may grow past its rest length before the "
                               "piece counts as torn (a vertex caught by a hand and dragged off)")
     # cloth against itself and the other simulated pieces (Newton VBD's self-contact); off by default:
-    # on a skirt over a walk it fought the body's contacts (a vertex 8.8 mm into the body, then a leg through)
+    # on a skirt over a walk it fought the body's contacts (a vertex 8.8 mm into the body, then a leg through,
+    # 2026-11-27, when a step let the cloth move only 1.9 mm: ``_self_contact_gap``); a pair of trousers with it
+    # at today's settings folds at the back of the knee instead of passing through itself there, at about 1.5x the cost
+    # (bench/RESULTS.md, session 99), not yet measured over the benches' clips
     self_contact: bool = spec(False, Flag())
     self_contact_margin: float = spec(0.003, _METRES, doc="metres at which two pieces of cloth start to push apart")
+    self_contact_exclusion: float = spec(0.02, _METRES, doc="metres apart when put on under which two bits of cloth "
+                                         "never push apart: a shell cut from the body crosses itself at the crotch, "
+                                         "and cloth touching there from the start never moved")
     air: Air | None = spec(Air(), optional(Nested(Air)), doc="air resistance on the cloth (cloth.air); None: a vacuum")
     device: str = spec("cpu", _Device(), doc="Warp's device: cuda runs the solver on an NVIDIA GPU "
                        "(bench/cloth_device.py); bit-identical results are promised on the CPU only")
@@ -608,7 +614,9 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
     model, meshes, held = _model(pieces, parts, start[0], start[1], s)
     solver = newton.solvers.SolverVBD(model=model, iterations=s.iterations, particle_enable_self_contact=s.self_contact,
                                       particle_self_contact_margin=s.self_contact_margin,
-                                      particle_self_contact_gap=s.self_contact_margin / 2)
+                                      particle_self_contact_gap=_self_contact_gap(s),
+                                      dat_conservative_bound_relaxation=DAT_RELAXATION,
+                                      particle_rest_shape_contact_exclusion_radius=s.self_contact_exclusion)
     s0, s1, control = model.state(), model.state(), model.control()
     pipeline = newton.CollisionPipeline(model, soft_contact_gap=s.contact_gap,
                                         enable_rigid_soft_full_surface_contact=s.full_contact)
@@ -626,6 +634,8 @@ def _run(pieces: list[ClothPiece], collider: Collider, s: ClothSettings, names: 
         if plan.lead and f == plan.lead - plan.settle:  # the arms are down: the body stands at frame 0, still
             _move(meshes, body0, np.zeros_like(body0))
         n = _substeps(prev[0][near], now[0][near], s)
+        if s.self_contact:  # no held particle further than self-contact lets the cloth follow in a step
+            n = max(n, _substeps(prev[1][held], now[1][held], s))
         dt = 1.0 / collider.fps / n
         if f == 1:
             s0.particle_qd.assign(s0.particle_qd.numpy() + _start_velocity(pieces, s0.particle_q.numpy(), prev[1], now[1],
@@ -697,6 +707,20 @@ def _near(collider: np.ndarray, q: np.ndarray, reach: float = 0.15) -> np.ndarra
     """The collider's vertices within ``reach`` of the cloth: where its speed sets the steps."""
     from scipy.spatial import cKDTree
     return np.flatnonzero(np.isfinite(cKDTree(q).query(collider, distance_upper_bound=reach)[0]))
+
+
+# Newton's self-contact lets a particle move at most DAT_RELAXATION / 2 of its query radius (the
+# contact margin and gap) between two detections (one a step). At the margin's 3 mm and half that
+# again, 1.9 mm a step, a pair of trousers was left where a walk began (bench/RESULTS.md, session
+# 99): the query radius now lets the cloth move ``max_step`` in a step, as far as the collider near
+# it (``_substeps``) and, with self-contact, the held particles (``_run``) may.
+DAT_RELAXATION = 0.85
+
+
+def _self_contact_gap(s: ClothSettings) -> float:
+    """Metres Newton's self-contact detection reaches past the contact margin: enough that the
+    cloth may move ``max_step`` between two detections."""
+    return max(s.self_contact_margin / 2, 2 * s.max_step / DAT_RELAXATION - s.self_contact_margin)
 
 
 def _substeps(before: np.ndarray, after: np.ndarray, s: ClothSettings) -> int:
