@@ -82,9 +82,9 @@ class ClothSettings:
                               "piece counts as torn (a vertex caught by a hand and dragged off)")
     # cloth against itself and the other simulated pieces (Newton VBD's self-contact); off by default:
     # on a skirt over a walk it fought the body's contacts (a vertex 8.8 mm into the body, then a leg through,
-    # 2026-11-27, when a step let the cloth move only 1.9 mm: ``_self_contact_gap``); a pair of trousers with it
-    # at today's settings folds at the back of the knee instead of passing through itself there, at about 1.5x the cost
-    # (bench/RESULTS.md, session 99), not yet measured over the benches' clips
+    # 2026-11-27, when a step let the cloth move only 1.9 mm: ``_self_contact_gap``); with it a pair of trousers
+    # follows a walk, but its knees' backs still pass through themselves in most frames (bench/RESULTS.md,
+    # session 99); not yet measured over the benches' clips
     self_contact: bool = spec(False, Flag())
     self_contact_margin: float = spec(0.003, _METRES, doc="metres at which two pieces of cloth start to push apart")
     self_contact_exclusion: float = spec(0.02, _METRES, doc="metres apart when put on under which two bits of cloth "
