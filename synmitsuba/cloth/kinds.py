@@ -35,6 +35,10 @@ class ClothKind:
     slight: float = 0.35
     # no air drag on its body side: close over the body, the air between is carried with it (``cloth.air``)
     sheltered: bool = False
+    # metres over the body its held cloth is set at, as the free cloth beside it lies (None: where the skinned
+    # garment is). A top's shell stands its offset (1.2-3 cm) off the body; its free cloth falls onto the body
+    # (4-8 mm off), and the yoke stood over it in a ledge across the chest and back (bench/RESULTS.md, session 100)
+    seat: float | None = None
 
 
 def above(landmark: str, band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
@@ -67,6 +71,9 @@ def yoke(band: float) -> Callable[[np.ndarray, BodyRegions], np.ndarray]:
     return held
 
 
+SEAT = 0.006  # metres a top's held cloth is set over the body (its free cloth on the upper torso: 4-8 mm)
+
+
 # One entry per simulated garment kind (a name in body.garments.GARMENTS).
 CLOTH_KINDS: dict[str, ClothKind] = {
     # hangs from its waistband and yoke, held down past the end of a top tucked into it (the cloth
@@ -85,11 +92,14 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     "coat": ClothKind("coating", above("hip_y", 0.14), outermost=True, layered=True, cuffs=0.04, sheltered=True),
     # tops over trousers or shorts (or bare legs), and jackets and blazers over the top (skinned) and the
     # trousers, shorts or skirt (simulated first: ``stages``) under them, nothing over them: hanging from the shoulders
+    # (a top of jersey, woven or knit seated on the body as its free cloth lies: ``seat``; a jacket's or blazer's
+    # shoulders stand off the body as they were cut)
     **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, slight=0.01,
-                       sheltered=True)
-       for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
-                                   ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04),
-                                   ("jacket", "denim", 0.04), ("blazer", "suiting", 0.04))},
+                       sheltered=True, seat=seat)
+       for name, fabric, cuffs, seat in (("tshirt", "jersey", 0.0, SEAT), ("tank", "jersey", 0.0, SEAT),
+                                         ("longsleeve", "jersey", 0.03, SEAT), ("shirt", "woven", 0.03, SEAT),
+                                         ("sweater", "knit", 0.04, SEAT), ("hoodie", "knit", 0.04, SEAT),
+                                         ("jacket", "denim", 0.04, None), ("blazer", "suiting", 0.04, None))},
     # trousers and shorts, held from the crotch up (the seat and the crotch, where the legs' tubes would be
     # pinched between the thighs), the legs hanging from there; held further down under a skinned garment
     # that reaches lower (a coat's skirt: ``simulate.simulated_garments``); a jumpsuit the same way, its

@@ -191,6 +191,15 @@ class _Garment:
     faces: np.ndarray  # the layer's faces but the band's
     band: np.ndarray
     depth: np.ndarray
+    sink: np.ndarray | None = None  # (P,) metres each held particle is set in from the skinned garment (``seated``)
+
+    def place(self, layer: np.ndarray) -> np.ndarray:
+        """Where the particles go on the skinned garment's ``layer`` vertices: held ones ``sink``
+        metres in along the cloth's normal."""
+        q = layer[self.rows]
+        if self.sink is None:
+            return q
+        return q - vertex_normals(q, self.piece.faces) * self.sink[:, None]
 
 
 def simulated_garments(human, names: list[str] | None = None) -> list[_Garment]:
@@ -216,8 +225,23 @@ def simulated_garments(human, names: list[str] | None = None) -> list[_Garment]:
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
         piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows], flat=kind.flat, sheltered=kind.sheltered)
-        out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth))
+        sink = None if kind.seat is None else seated(human, part.rest[rows], held, kind.seat, mesh.offset)
+        out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth, sink))
     return out
+
+
+def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float) -> np.ndarray:
+    """(P,) metres to set each held particle in so that it stands ``seat`` over the rest body
+    (none where it is closer already): the shell proper, which stands the garment's ``offset``
+    off the body, in full under 3 cm below the neck's base; not at all above that base, nor over
+    ``offset`` + 8 mm, so a collar stands round the neck and a hood lies down the back as they
+    were cut (set in with the shell, a hoodie's hood went under its back)."""
+    from synmitsuba.body.collide import Surface
+    surface = Surface.of(human.body.vertices, human.body.faces, human._incidence, human._around)
+    height, _ = surface.clearance(rest, band=0.1)
+    below_neck = np.clip((human.regions.neck_y - rest[:, 1]) / 0.03, 0.0, 1.0)
+    shell = np.clip((offset + 0.008 - height) / 0.005, 0.0, 1.0)
+    return np.where(held, np.clip(height - seat, 0.0, None) * below_neck * shell, 0.0)
 
 
 def _without_band(human, part):
@@ -427,7 +451,7 @@ def cloth_inputs(human, motion, s: ClothSettings, names: list[str] | None = None
         worn = [done[human.parts[u.part].name][frame] if human.parts[u.part].name in done else layers[u.part].vertices
                 for u in under]
         body = np.concatenate([body, *(v[u.rows] for v, u in zip(worn, under)), body[web]])
-        return body, np.concatenate([layers[g.part].vertices[g.rows] for g in garments])
+        return body, np.concatenate([g.place(layers[g.part].vertices) for g in garments])
 
     def at(frame: int) -> tuple[np.ndarray, np.ndarray]:
         rotations, root = motion.frame(frame)
