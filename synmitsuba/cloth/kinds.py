@@ -35,9 +35,10 @@ class ClothKind:
     slight: float = 0.35
     # no air drag on its body side: close over the body, the air between is carried with it (``cloth.air``)
     sheltered: bool = False
-    # metres over the body its held cloth is set at, as the free cloth beside it lies (None: where the skinned
-    # garment is). A top's shell stands its offset (1.2-3 cm) off the body; its free cloth falls onto the body
-    # (4-8 mm off), and the yoke stood over it in a ledge across the chest and back (bench/RESULTS.md, session 100)
+    # metres over the body (over the top under it, for a jacket) its held cloth is set at, as the free cloth
+    # beside it lies (None: where the skinned garment is). A top's shell stands its offset (1.2-3 cm) off the body;
+    # its free cloth falls onto the body (4-8 mm off), and the yoke stood over it in a ledge across the chest and
+    # back (bench/RESULTS.md, sessions 100 and 101)
     seat: float | None = None
 
 
@@ -91,15 +92,13 @@ CLOTH_KINDS: dict[str, ClothKind] = {
     # (``garments._parted``: closed, it rode up a run's stride to the hips, session 91), hangs from them
     "coat": ClothKind("coating", above("hip_y", 0.14), outermost=True, layered=True, cuffs=0.04, sheltered=True),
     # tops over trousers or shorts (or bare legs), and jackets and blazers over the top (skinned) and the
-    # trousers, shorts or skirt (simulated first: ``stages``) under them, nothing over them: hanging from the shoulders
-    # (a top of jersey, woven or knit seated on the body as its free cloth lies: ``seat``; a jacket's or blazer's
-    # shoulders stand off the body as they were cut)
+    # trousers, shorts or skirt (simulated first: ``stages``) under them, nothing over them: hanging from the shoulders,
+    # the held cloth seated where the free cloth lies (``seat``: on the body, or on the top under a jacket)
     **{name: ClothKind(fabric, yoke(0.04), outermost=True, layered=True, cuffs=cuffs, flat=True, slight=0.01,
-                       sheltered=True, seat=seat)
-       for name, fabric, cuffs, seat in (("tshirt", "jersey", 0.0, SEAT), ("tank", "jersey", 0.0, SEAT),
-                                         ("longsleeve", "jersey", 0.03, SEAT), ("shirt", "woven", 0.03, SEAT),
-                                         ("sweater", "knit", 0.04, SEAT), ("hoodie", "knit", 0.04, SEAT),
-                                         ("jacket", "denim", 0.04, None), ("blazer", "suiting", 0.04, None))},
+                       sheltered=True, seat=SEAT)
+       for name, fabric, cuffs in (("tshirt", "jersey", 0.0), ("tank", "jersey", 0.0), ("longsleeve", "jersey", 0.03),
+                                   ("shirt", "woven", 0.03), ("sweater", "knit", 0.04), ("hoodie", "knit", 0.04),
+                                   ("jacket", "denim", 0.04), ("blazer", "suiting", 0.04))},
     # trousers and shorts, held from the crotch up (the seat and the crotch, where the legs' tubes would be
     # pinched between the thighs), the legs hanging from there; held further down under a skinned garment
     # that reaches lower (a coat's skirt: ``simulate.simulated_garments``); a jumpsuit the same way, its

@@ -33,7 +33,7 @@ from synmitsuba.cloth.lead import Schedule, arm_joints, arms_from_rest
 from synmitsuba.cloth.seal import WaistSeal, waist_seal
 from synmitsuba.cloth.web import thigh_web
 from synmitsuba.errors import ConfigError, SynMitsubaError
-from synmitsuba.geometry import rigid_fit, triangle_areas, unique_rows, vertex_normals
+from synmitsuba.geometry import face_normals, rigid_fit, triangle_areas, unique_rows, vertex_normals
 from synmitsuba.schema import POSITIVE, Check, Flag, Nested, Number, check_fields, optional, spec
 
 
@@ -225,23 +225,68 @@ def simulated_garments(human, names: list[str] | None = None) -> list[_Garment]:
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
         piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows], flat=kind.flat, sheltered=kind.sheltered)
-        sink = None if kind.seat is None else seated(human, part.rest[rows], held, kind.seat, mesh.offset)
+        sink = None if kind.seat is None else seated(human, part.rest[rows], held, kind.seat + _under_yoke(human, part.name),
+                                                     mesh.offset, cloth)
         out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth, sink))
     return out
 
 
-def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float) -> np.ndarray:
+def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float, faces: np.ndarray) -> np.ndarray:
     """(P,) metres to set each held particle in so that it stands ``seat`` over the rest body
     (none where it is closer already): the shell proper, which stands the garment's ``offset``
     off the body, in full under 3 cm below the neck's base; not at all above that base, nor over
     ``offset`` + 8 mm, so a collar stands round the neck and a hood lies down the back as they
-    were cut (set in with the shell, a hoodie's hood went under its back)."""
+    were cut (set in with the shell, a hoodie's hood went under its back). Moved along its
+    normal, the cloth only goes in where that normal is the body's (not at a hood's seam), by
+    no more than ``SINK_SLOPE`` a metre over a neighbour and not at all on its open edges
+    (``_gentle``), and no held triangle is turned over: each of these turned some over (shards
+    at necklines and cuffs; bench/RESULTS.md, session 101)."""
     from synmitsuba.body.collide import Surface
     surface = Surface.of(human.body.vertices, human.body.faces, human._incidence, human._around)
-    height, _ = surface.clearance(rest, band=0.1)
+    height, outward = surface.clearance(rest, band=0.1)
     below_neck = np.clip((human.regions.neck_y - rest[:, 1]) / 0.03, 0.0, 1.0)
     shell = np.clip((offset + 0.008 - height) / 0.005, 0.0, 1.0)
-    return np.where(held, np.clip(height - seat, 0.0, None) * below_neck * shell, 0.0)
+    facing = np.clip((np.einsum("ij,ij->i", vertex_normals(rest, faces), outward) - 0.7) / 0.2, 0.0, 1.0)
+    sink = _gentle(np.where(held, np.clip(height - seat, 0.0, None) * below_neck * shell * facing, 0.0), rest, faces, held)
+    for _ in range(8):  # not on a held sliver that the move would still turn over
+        placed = rest - vertex_normals(rest, faces) * sink[:, None]
+        turned = held[faces].all(1) & (np.einsum("ij,ij->i", face_normals(rest[faces]), face_normals(placed[faces])) < 0.5)
+        if not turned.any():
+            break
+        sink[faces[turned].ravel()] = 0.0
+        sink = _gentle(sink, rest, faces, held)
+    return sink
+
+
+SINK_SLOPE = 0.5  # metres a held particle is set in more than its neighbour, a metre between them
+
+
+def _gentle(sink: np.ndarray, rest: np.ndarray, faces: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """``sink`` lowered until no held particle is set in more than ``SINK_SLOPE`` times an edge's
+    length over its held neighbour's (a distance transform over the held cloth's edges), and
+    none on the cloth's open edges (a neckline, a cuff: moved along their normals, which lean
+    out there, the triangles beside them turned over)."""
+    e, count = unique_rows(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1),
+                           return_counts=True)
+    out = sink.copy()
+    out[e[count == 1].ravel()] = 0.0
+    e = e[held[e[:, 0]] & held[e[:, 1]]]
+    e = np.concatenate([e, e[:, ::-1]])
+    step = SINK_SLOPE * np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)
+    while True:
+        bound = out.copy()
+        np.minimum.at(bound, e[:, 0], out[e[:, 1]] + step)
+        if np.array_equal(bound, out):
+            return out
+        out = bound
+
+
+def _under_yoke(human, name: str) -> float:
+    """Metres the garments worn under garment ``name`` that reach its yoke (a top under a jacket)
+    stand off the body: the most of their offsets, 0 if none."""
+    top = human.regions.shoulder[1] - 0.04
+    return max((m.offset for m in human.garments if m.params.kind in worn_under(name, [g.params.kind for g in human.garments])
+                and m.vertices[:, 1].max() > top), default=0.0)
 
 
 def _without_band(human, part):
