@@ -24,6 +24,7 @@ from typing import Callable
 
 import numpy as np
 
+from synmitsuba.body.binding import MeshIndex
 from synmitsuba.body.garments import GARMENTS, hem_sources
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
@@ -225,27 +226,31 @@ def simulated_garments(human, names: list[str] | None = None) -> list[_Garment]:
         normals = vertex_normals(part.rest[:main], faces)[band]
         depth = np.einsum("ij,ij->i", part.rest[band] - part.rest[main:], normals)  # signed: towards the body
         piece = ClothPiece(cloth, held, fabric, carried, part.rest[rows], flat=kind.flat, sheltered=kind.sheltered)
-        sink = None if kind.seat is None else seated(human, part.rest[rows], held, kind.seat + _under_yoke(human, part.name),
-                                                     mesh.offset, cloth)
+        sink = None if kind.seat is None else seated(human, part.rest[rows], held, kind.seat, mesh.offset, cloth,
+                                                     _under_yoke(human, part.name))
         out.append(_Garment(part.name, k, rows, index, piece, faces, band, depth, sink))
     return out
 
 
-def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float, faces: np.ndarray) -> np.ndarray:
+def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float, faces: np.ndarray,
+           under: tuple | list = ()) -> np.ndarray:
     """(P,) metres to set each held particle in so that it stands ``seat`` over the rest body
-    (none where it is closer already): the shell proper, which stands the garment's ``offset``
-    off the body, in full under 3 cm below the neck's base; not at all above that base, nor over
-    ``offset`` + 8 mm, so a collar stands round the neck and a hood lies down the back as they
-    were cut (set in with the shell, a hoodie's hood went under its back). Moved along its
-    normal, the cloth only goes in where that normal is the body's (not at a hood's seam), by
-    no more than ``SINK_SLOPE`` a metre over a neighbour and not at all on its open edges
-    (``_gentle``), and no held triangle is turned over: each of these turned some over (shards
-    at necklines and cuffs; bench/RESULTS.md, session 101)."""
+    and the garments ``under`` it (``MeshIndex``es: the top under a jacket), none where it is
+    closer already or inside one (a jacket's back in a hoodie's hood): the shell proper, which
+    stands the garment's ``offset`` off the body, in full under 3 cm below the neck's base; not
+    at all above that base, nor over ``offset`` + 8 mm, so a collar stands round the neck and a
+    hood lies down the back as they were cut (set in with the shell, a hoodie's hood went under
+    its back). Moved along its normal, the cloth only goes in where that normal is the body's
+    (not at a hood's seam), by no more than ``SINK_SLOPE`` a metre over a neighbour and not at
+    all on its open edges (``_gentle``), and no held triangle is turned over: each of these
+    turned some over (shards at necklines and cuffs; bench/RESULTS.md, session 101)."""
     from synmitsuba.body.collide import Surface
     surface = Surface.of(human.body.vertices, human.body.faces, human._incidence, human._around)
     height, outward = surface.clearance(rest, band=0.1)
     below_neck = np.clip((human.regions.neck_y - rest[:, 1]) / 0.03, 0.0, 1.0)
     shell = np.clip((offset + 0.008 - height) / 0.005, 0.0, 1.0)
+    for mesh in under:
+        height = np.minimum(height, np.maximum(mesh.signed_distance(rest), 0.0))
     facing = np.clip((np.einsum("ij,ij->i", vertex_normals(rest, faces), outward) - 0.7) / 0.2, 0.0, 1.0)
     sink = _gentle(np.where(held, np.clip(height - seat, 0.0, None) * below_neck * shell * facing, 0.0), rest, faces, held)
     for _ in range(8):  # not on a held sliver that the move would still turn over
@@ -281,12 +286,12 @@ def _gentle(sink: np.ndarray, rest: np.ndarray, faces: np.ndarray, held: np.ndar
         out = bound
 
 
-def _under_yoke(human, name: str) -> float:
-    """Metres the garments worn under garment ``name`` that reach its yoke (a top under a jacket)
-    stand off the body: the most of their offsets, 0 if none."""
+def _under_yoke(human, name: str) -> list[MeshIndex]:
+    """The rest surfaces (``MeshIndex``) of the garments worn under garment ``name`` that reach
+    its yoke (a top under a jacket)."""
     top = human.regions.shoulder[1] - 0.04
-    return max((m.offset for m in human.garments if m.params.kind in worn_under(name, [g.params.kind for g in human.garments])
-                and m.vertices[:, 1].max() > top), default=0.0)
+    return [MeshIndex(human.parts[k].rest, human.parts[k].faces) for k in _worn_under(human, name)
+            if human.parts[k].rest[:, 1].max() > top]
 
 
 def _without_band(human, part):
