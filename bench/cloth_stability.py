@@ -54,13 +54,14 @@ SAME_CLOTH_SINCE = {"skirt": "ed120b5", "dress": "4dcabac", "shift": "4dcabac", 
 # Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated as today from
 # 6271691, jackets and blazers over trousers or shorts from f177db3 (54b59dd made them clips of the set, so
 # clips drawn before it may be other clips), and over simulated trousers and shorts, which the set counts too, from
-# 06101e1: a set of their own (``--set tops``), logged apart, counted from TOPS_SINCE: edc111f, a coat's skirt
-# cut twice as fine for simulation (after aeaa2ff, where a top over simulated trousers is set out of the body
+# 06101e1: a set of their own (``--set tops``), logged apart, counted from TOPS_SINCE: 427d272, tops', jackets' and
+# blazers' held cloth set on what they cover without turning triangles over (after dbe5f8d, tops' held cloth set
+# on the body; edc111f, a coat's skirt cut twice as fine for simulation; aeaa2ff, where a top over simulated trousers is set out of the body
 # after them; 2ac51ce: coats simulated, and the trousers under
 # them no longer held down to a coat's hem; a4ebae0: simulated trousers', shorts' and jumpsuits' legs twice as
 # fine each way; e69f74c: trousers, chinos, shorts and jumpsuits as twill; 5b3c83f: their legs as tubes,
 # jumpsuits in the set).
-TOPS_SINCE = "edc111f"
+TOPS_SINCE = "427d272"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
