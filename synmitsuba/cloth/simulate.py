@@ -25,7 +25,7 @@ from typing import Callable
 import numpy as np
 
 from synmitsuba.body.binding import MeshIndex
-from synmitsuba.body.garments import GARMENTS, hem_sources
+from synmitsuba.body.garments import GARMENTS, hem_sources, open_edges
 from synmitsuba.body.topology import collapse_short_edges, weld
 from synmitsuba.cloth.air import Air, drag_forces
 from synmitsuba.cloth.fabrics import FABRICS, Fabric
@@ -242,7 +242,7 @@ def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float
     hood lies down the back as they were cut (set in with the shell, a hoodie's hood went under
     its back). Moved along its normal, the cloth only goes in where that normal is the body's
     (not at a hood's seam), by no more than ``SINK_SLOPE`` a metre over a neighbour and not at
-    all on its open edges (``_gentle``), and no held triangle is turned over: each of these
+    all on its open edges (``_HeldEdges.gentle``), and no held triangle is turned over: each of these
     turned some over (shards at necklines and cuffs; bench/RESULTS.md, session 101)."""
     from synmitsuba.body.collide import Surface
     surface = Surface.of(human.body.vertices, human.body.faces, human._incidence, human._around)
@@ -252,38 +252,48 @@ def seated(human, rest: np.ndarray, held: np.ndarray, seat: float, offset: float
     for mesh in under:
         height = np.minimum(height, np.maximum(mesh.signed_distance(rest), 0.0))
     facing = np.clip((np.einsum("ij,ij->i", vertex_normals(rest, faces), outward) - 0.7) / 0.2, 0.0, 1.0)
-    sink = _gentle(np.where(held, np.clip(height - seat, 0.0, None) * below_neck * shell * facing, 0.0), rest, faces, held)
+    held_edges = _HeldEdges.of(rest, faces, held)
+    sink = held_edges.gentle(np.where(held, np.clip(height - seat, 0.0, None) * below_neck * shell * facing, 0.0))
     for _ in range(8):  # not on a held sliver that the move would still turn over
         placed = rest - vertex_normals(rest, faces) * sink[:, None]
         turned = held[faces].all(1) & (np.einsum("ij,ij->i", face_normals(rest[faces]), face_normals(placed[faces])) < 0.5)
         if not turned.any():
             break
         sink[faces[turned].ravel()] = 0.0
-        sink = _gentle(sink, rest, faces, held)
+        sink = held_edges.gentle(sink)
     return sink
 
 
 SINK_SLOPE = 0.5  # metres a held particle is set in more than its neighbour, a metre between them
 
 
-def _gentle(sink: np.ndarray, rest: np.ndarray, faces: np.ndarray, held: np.ndarray) -> np.ndarray:
-    """``sink`` lowered until no held particle is set in more than ``SINK_SLOPE`` times an edge's
-    length over its held neighbour's (a distance transform over the held cloth's edges), and
-    none on the cloth's open edges (a neckline, a cuff: moved along their normals, which lean
-    out there, the triangles beside them turned over)."""
-    e, count = unique_rows(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1),
-                           return_counts=True)
-    out = sink.copy()
-    out[e[count == 1].ravel()] = 0.0
-    e = e[held[e[:, 0]] & held[e[:, 1]]]
-    e = np.concatenate([e, e[:, ::-1]])
-    step = SINK_SLOPE * np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)
-    while True:
-        bound = out.copy()
-        np.minimum.at(bound, e[:, 0], out[e[:, 1]] + step)
-        if np.array_equal(bound, out):
-            return out
-        out = bound
+@dataclass
+class _HeldEdges:
+    """The held cloth's edges (E, 2), both ways, ``SINK_SLOPE`` times their rest lengths, and the
+    particles on the cloth's open edges (``ends``: a neckline, a cuff)."""
+    edges: np.ndarray
+    step: np.ndarray
+    ends: np.ndarray
+
+    @classmethod
+    def of(cls, rest: np.ndarray, faces: np.ndarray, held: np.ndarray) -> "_HeldEdges":
+        e = unique_rows(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1))
+        e = e[held[e[:, 0]] & held[e[:, 1]]]
+        e = np.concatenate([e, e[:, ::-1]])
+        return cls(e, SINK_SLOPE * np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1), np.unique(open_edges(faces)))
+
+    def gentle(self, sink: np.ndarray) -> np.ndarray:
+        """``sink`` lowered until no held particle is set in more than ``step`` over a held
+        neighbour's (a distance transform over the edges), and none on the open edges (moved
+        along their normals, which lean out there, the triangles beside them turned over)."""
+        out = sink.copy()
+        out[self.ends] = 0.0
+        while True:
+            bound = out.copy()
+            np.minimum.at(bound, self.edges[:, 0], out[self.edges[:, 1]] + self.step)
+            if np.array_equal(bound, out):
+                return out
+            out = bound
 
 
 def _under_yoke(human, name: str) -> list[MeshIndex]:
