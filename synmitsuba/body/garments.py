@@ -830,6 +830,7 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     if kind.layer in (Layer.TOP, Layer.DRESS):
         slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
         v = drape(v, f, _over_torso(body, r, v), slope)
+        v = smooth_openings(v, f)
     return v, f, uv
 
 
@@ -1142,6 +1143,51 @@ def open_edges(f: np.ndarray, merged: np.ndarray | None = None) -> np.ndarray:
     return directed[(counts[inv.ravel()] == 1) & (m[:, 0] != m[:, 1])]
 
 
+EDGE_SMOOTHING = (3, 0.004)  # rounds of smoothing a top's openings along their curve, and metres a point may move
+
+
+def smooth_openings(v: np.ndarray, f: np.ndarray, rounds: int = EDGE_SMOOTHING[0],
+                    cap: float = EDGE_SMOOTHING[1]) -> np.ndarray:
+    """``v`` with its openings' edges (necklines, hems, armholes) smoothed along their curves:
+    a cut along a level set over the body's 1-1.5 cm triangles, offset centimetres along the
+    normals, zigzags by millimetres round the neck and dips in a notch at the centre front.
+    Each edge point moves in its surface's tangent plane towards the middle of its two
+    neighbours on the edge (Taubin's lambda/mu steps, which take out the zigzag and keep the
+    curve's size), by at most ``cap``; a face the moves would turn over more than 60 degrees
+    has its points' moves halved (up to six times). Points where openings meet stay put.
+    Seam copies of a point (``weld``) move as one."""
+    rep = weld(v)
+    ff = rep[f]
+    nxt, prv, free = _along_openings(rep[open_edges(f, rep)], len(v))
+    p = v[rep]
+    n = vertex_normals(p, ff)
+    q = p.copy()
+    for _ in range(rounds):
+        for step in (0.5, -0.53):
+            d = 0.5 * (q[nxt] + q[prv]) - q
+            d -= np.einsum("ij,ij->i", d, n)[:, None] * n
+            q[free] += step * d[free]
+    move = q - p
+    move *= np.minimum(1.0, cap / np.maximum(np.linalg.norm(move, axis=1), 1e-12))[:, None]
+    before = face_normals(p[ff])
+    for _ in range(6):
+        turned = np.einsum("ij,ij->i", face_normals((p + move)[ff]), before) < 0.5
+        if not turned.any():
+            break
+        move[np.unique(ff[turned])] *= 0.5
+    return (p + move)[rep]
+
+
+def _along_openings(edges: np.ndarray, n_v: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each vertex's next and previous neighbour along the openings ``edges`` (``open_edges``;
+    a vertex on none is its own), and which vertices lie inside a single opening's run (one
+    edge in, one out, and so have both neighbours): (next, previous, free)."""
+    nxt, prv = np.arange(n_v), np.arange(n_v)
+    nxt[edges[:, 0]], prv[edges[:, 1]] = edges[:, 1], edges[:, 0]
+    simple = (np.bincount(edges[:, 0], minlength=n_v) == 1) & (np.bincount(edges[:, 1], minlength=n_v) == 1)
+    return nxt, prv, simple & simple[nxt] & simple[prv]
+
+
 def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, rounds: int = 40,
           soften: int = SOFTEN) -> np.ndarray:
     """Cloth that hangs: going down an edge, a ``hanging`` vertex may come in towards the body
@@ -1193,6 +1239,22 @@ def hem_sources(m: GarmentMesh) -> np.ndarray:
     return source
 
 
+HEM_SMOOTHING = 3  # rounds of averaging a hem's turn-in direction with its neighbours' along the edge
+
+
+def _smooth_along(edge: np.ndarray, ends: np.ndarray, x: np.ndarray, rounds: int) -> np.ndarray:
+    """Unit vectors ``x`` at the openings' vertices ``ends`` averaged ``rounds`` times with their
+    two neighbours along the openings (weights 1/4, 1/2, 1/4), where a vertex has both; ``edge``
+    and ``ends`` on welded vertices (a seam's copies of a point are one, and take one value)."""
+    points, first, local = np.unique(ends, return_index=True, return_inverse=True)
+    nxt, prv, free = _along_openings(np.searchsorted(points, edge), len(points))
+    y = x[first]
+    for _ in range(rounds):
+        y = np.where(free[:, None], 0.25 * y[nxt] + 0.5 * y + 0.25 * y[prv], y)
+    y = y[local.ravel()]
+    return y / np.maximum(np.linalg.norm(y, axis=1, keepdims=True), 1e-12)
+
+
 def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_normal: bool = False):
     """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
     thickness) deep towards the closest body point (``along_normal``: along the cloth's own
@@ -1200,7 +1262,8 @@ def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_
     crossing itself), so an edge seen in a close-up has thickness.
     Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
     the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
-    edge = open_edges(f, weld(v))
+    rep = weld(v)
+    edge = open_edges(f, rep)
     if not len(edge):
         return v, f, uv
     ends = np.unique(edge)
@@ -1210,6 +1273,8 @@ def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_
     towards = np.where(gap > 1e-4, (v[ends] - closest) / np.maximum(gap, 1e-9), n)  # on the body: the cloth's normal
     if along_normal:
         towards = n * np.where(np.einsum("ij,ij->i", n, towards) < 0, -1.0, 1.0)[:, None]
+    else:  # the closest point jumps between neighbours over a hollow: averaged along the edge, no teeth
+        towards = _smooth_along(rep[edge], rep[ends], towards, HEM_SMOOTHING)
     inner = -np.ones(len(v), np.int64)
     inner[ends] = len(v) + np.arange(len(ends))
     a, b = edge.T
