@@ -23,7 +23,7 @@ from synmitsuba.body.sizing import GRADE_LENGTH, Fit, Girths, garment_fit, measu
 from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_points, heel_height, heel_mesh, heel_pitch,
                                    lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
-from synmitsuba.body.topology import cut, refine, weld
+from synmitsuba.body.topology import cut, largest_piece, refine, submesh, weld
 from synmitsuba.geometry import face_normals, unique_rows, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
@@ -697,9 +697,14 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
 
 def _cut_shell(body, r: BodyRegions, split, phi: np.ndarray, offset: float):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along the
-    normals: (vertices, faces, uv)."""
+    normals: (vertices, faces, uv). Only the cut's largest piece is kept: where a region's
+    field dips back over zero past its edge (a tank's arms, cut by its armholes, left a patch
+    of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the arm
+    skinned, and fall away simulated."""
     src = split.source
     f, p, n, uv = cut(split.faces, phi[src], body.vertices[src], r.normals[src], split.uv)
+    used, f = submesh(f, largest_piece(p, f))
+    p, n, uv = p[used], n[used], uv[used]
     return p + n / np.linalg.norm(n, axis=1, keepdims=True) * offset, f, uv
 
 
