@@ -33,16 +33,11 @@ def submesh(faces: np.ndarray, keep_vertex: np.ndarray) -> tuple[np.ndarray, np.
 def largest_piece(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(V,) True for the vertices of the mesh's largest connected piece (by vertex count), its
     pieces joined where vertices meet (``weld``: a uv seam does not split a piece)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
     rep = weld(vertices)
     f = rep[faces]
-    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-    n = len(vertices)
-    _, label = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)), directed=False)
-    label = label[rep]
-    size = np.bincount(label[np.unique(faces)], minlength=label.max() + 1)
-    return label == np.argmax(size)
+    piece = _lowest_joined(np.concatenate([f[:, [0, 1]], f[:, [1, 2]]]), len(vertices))[rep]
+    size = np.bincount(piece[np.unique(faces)], minlength=len(vertices))
+    return piece == np.argmax(size)
 
 
 def clip_faces(faces: np.ndarray, phi: np.ndarray, snap: float = 0.02):
