@@ -617,28 +617,29 @@ def test_a_dress_is_simulated_without_edges_shorter_than_two_millimetres(dress):
 
 def test_a_welded_fin_on_a_dress_seam_leaves_the_cloth_mesh_manifold():
     """The README's turn (``motion preview turn --outfit dress --seed 4``): the dress's two halves
-    each have a sliver on the seam line, back to back; welded, they are one triangle twice (a
+    each had a sliver on the seam line, back to back; welded, they were one triangle twice (a
     fin), which Newton read as a non-manifold edge ("node_idx -1 is out of range" from its
-    colouring). The cloth stage drops the fin: every edge of the piece, counted here, joins at
-    most two triangles, and no triangle is there twice."""
+    colouring). Since tops and dresses stand off along averaged normals the build leaves no
+    sliver there (none in 150 random subjects), so the fin is put back here, as it was: a
+    triangle of the piece twice, the second back to back. The stage's ``_without_fins`` drops
+    both; every edge of the piece, counted here, joins at most two triangles, and no triangle is
+    there twice, with the fin and as built."""
     import synmitsuba as sm
-    from synmitsuba.body.topology import weld
     from synmitsuba.body.recipe import SubjectConfig
-    from synmitsuba.cloth.simulate import simulated_garments
+    from synmitsuba.cloth.simulate import _without_fins, simulated_garments
     from synmitsuba.motion.sources import load_motion
     rng = np.random.default_rng(4)
     load_motion("turn", rng, seconds=1.5, field="CLIP")  # as the CLI draws: the clip first
     human = sm.build_subject(sm.sample_subject(rng, SubjectConfig.from_dict({"cloth": "simulated",
                                                                             "outfit": ["dress"]}, "config")))
     (g,) = simulated_garments(human)
-    part = human.parts[g.part]
-    _, welded = np.unique(weld(part.rest), return_inverse=True)
-    tri = np.sort(welded.reshape(-1)[g.faces], axis=1)
-    assert len(tri) - len(np.unique(tri, axis=0)) == 1  # the fin, in the layer as built
-    f = g.piece.faces
-    _, count = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0,
-                         return_counts=True)
-    assert count.max() == 2 and len(np.unique(np.sort(f, axis=1), axis=0)) == len(f)
+    built = g.piece.faces
+    finned = np.vstack([built, built[len(built) // 2, [0, 2, 1]][None]])
+    for f in (built, _without_fins(finned)):
+        _, count = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0,
+                             return_counts=True)
+        assert count.max() == 2 and len(np.unique(np.sort(f, axis=1), axis=0)) == len(f)
+    assert len(_without_fins(finned)) == len(built) - 1
 
 
 def _skirt_subject(cloth: str = "simulated"):
