@@ -523,14 +523,18 @@ def test_lines_of_sight_put_one_subject_behind_another():
 def test_an_occlusion_target_is_met_in_rendered_visible_fractions(sm):
     """A target share of partly hidden records (visible fraction in [0.3, 0.8]) chosen from
     ray-cast estimates shows in the rendered records' own visible fractions (visible / amodal
-    pixels); the clearest views, chosen without a target, hide almost nobody (2 of 20 records
-    of this scene)."""
+    pixels), over two scenes; the clearest views, chosen without a target, hide almost nobody
+    (1 of 20 records of the first). One scene's share moves with any change to the subjects'
+    shapes (which views the estimates pick): over scenes 1-6, 0.25-0.4 on b76a89d, 0.2-0.6 once
+    tops stood off along averaged normals at the small of the back (82edb19)."""
     cfg = {**SMALL, "subjects": {**SMALL["subjects"], "count": 5}, "occlusion": {"share": 0.5},
            "cameras": {**SMALL["cameras"], "count": 4, "width": 96, "height": 72, "motion": ["static"]}}
-    spec = sm.compose_scene(cfg, np.random.default_rng(1))
-    vis = [r["visible_fraction"] for _, _, s in sm.render_sequence(spec, frames=[spec.scored_frames[0]], spp=1)
-           for r in s.subjects]
-    assert len(vis) == 20 and np.mean([(0.3 <= v <= 0.8) for v in vis]) >= 0.3, np.round(vis, 2)
+    vis = []
+    for seed in (1, 2):
+        spec = sm.compose_scene(cfg, np.random.default_rng(seed))
+        vis += [r["visible_fraction"] for _, _, s in sm.render_sequence(spec, frames=[spec.scored_frames[0]], spp=1)
+                for r in s.subjects]
+    assert len(vis) == 40 and np.mean([(0.3 <= v <= 0.8) for v in vis]) >= 0.3, np.round(vis, 2)
 
 
 def test_a_clip_no_camera_can_frame_gets_a_new_motion(sm):
