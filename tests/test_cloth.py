@@ -619,8 +619,8 @@ def test_a_welded_fin_on_a_dress_seam_leaves_the_cloth_mesh_manifold():
     """The README's turn (``motion preview turn --outfit dress --seed 4``): the dress's two halves
     each had a sliver on the seam line, back to back; welded, they were one triangle twice (a
     fin), which Newton read as a non-manifold edge ("node_idx -1 is out of range" from its
-    colouring). Since tops and dresses stand off along averaged normals the build leaves no
-    sliver there (none in 150 random subjects), so the fin is put back here, as it was: a
+    colouring). Since tops and dresses stand off along averaged normals at the small of the
+    back (82edb19) this dress has no such slivers, so the fin is put back here, as it was: a
     triangle of the piece twice, the second back to back. The stage's ``_without_fins`` drops
     both; every edge of the piece, counted here, joins at most two triangles, and no triangle is
     there twice, with the fin and as built."""
