@@ -46,6 +46,10 @@ TUCK = 0.03  # metres under the waist a top worn with a skirt ends
 SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
 OFFSET_SMOOTHING = 16  # rounds of averaging the body's normals over neighbours before tops stand off along them
 OFFSET_BLEND = 0.04    # metres over which the averaged normals take over from the skin's (over the crotch, the waist)
+# where a shell stood FOLD[0] metres off along the skin's normals would turn over (under the chest,
+# the armpits, the inner elbows), spread over neighbours FOLD[1] rounds and scaled by FOLD[2]: tops
+# stand off along the averaged normals there too, from the crotch's height to FOLD[3] under the shoulders'
+FOLD = (0.05, 8, 3.0, 0.04)
 # a skirt's weights: from the hip line's own down to both legs' over this drop (metres), and a point
 # this share of its ring's radius to one side of the centre follows that side's leg alone
 LEGS_BLEND, LEGS_SIDE = 0.08, 0.7
@@ -393,25 +397,49 @@ class BodyRegions:
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
-                      rounds: int = OFFSET_SMOOTHING, blend: float = OFFSET_BLEND) -> np.ndarray:
-    """The directions tops and dresses stand off along: between the heights ``low`` and ``high``
-    (over the small of the back) the body's unit ``normals`` averaged over neighbours ``rounds``
-    times, elsewhere the skin's own, blended over ``blend`` metres. Offset along the skin's own
-    normals, a loose top folds over itself where the spine's groove is narrower than its offset
-    (a sweater 39 mm off: 88 faces over the torso turned to the body, a dark triangle from
-    behind); the averaged directions spread apart there. Averaged under the crotch's height
-    too, they tilted a t-shirt's back hem down under the buttocks, where a walking thigh caught
-    its simulated cloth and dragged it 25 cm behind; over the shoulder blades, the simulated
-    t-shirt's cloth under its held yoke turned down in a shelf. One field for all tops: a jacket
-    and the sweater under it lie on the same lines, in order."""
+                      top: float, cloth: np.ndarray, rounds: int = OFFSET_SMOOTHING, blend: float = OFFSET_BLEND) -> np.ndarray:
+    """The directions tops and dresses stand off along: the body's unit ``normals`` averaged
+    over neighbours ``rounds`` times between the heights ``low`` and ``high`` (over the small of
+    the back) and where the skin's own would fold a loose top over itself (``fold_prone``, over
+    the ``cloth`` vertices, from ``low`` up to ``top``), elsewhere the skin's own, blended over
+    ``blend`` metres. Offset along the skin's own normals, a loose top folds over itself where
+    the body curves tighter than its offset (a sweater 39 mm off: 88 faces over the torso turned
+    to the body, a dark triangle at the spine from behind, a hard crease under the chest); the
+    averaged directions spread apart there. Averaged under the crotch's height too, they tilted
+    a t-shirt's back hem down under the buttocks, where a walking thigh caught its simulated
+    cloth and dragged it 25 cm behind; over the shoulder blades, the simulated t-shirt's cloth
+    under its held yoke turned down in a shelf; round the neck, they rippled a neckline. One
+    field for all tops: a jacket and the sweater under it lie on the same lines, in order."""
     mean = neighbour_mean(faces, len(normals))
     n = normals
     for _ in range(rounds):
         n = mean @ n
         n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    t = np.clip((v[:, 1] - low) / blend, 0.0, 1.0) * np.clip((high - v[:, 1]) / blend, 0.0, 1.0)
-    n = normals + (t * t * (3 - 2 * t))[:, None] * (n - normals)
+    def ramp(t):
+        t = np.clip(t, 0.0, 1.0)
+        return t * t * (3 - 2 * t)
+    above = ramp((v[:, 1] - low) / blend)
+    t = np.maximum(above * ramp((high - v[:, 1]) / blend),
+                   above * ramp((top - v[:, 1]) / blend) * fold_prone(v, faces, normals, mean, cloth))
+    n = normals + t[:, None] * (n - normals)
     return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def fold_prone(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, mean, cloth: np.ndarray,
+               reach: float = FOLD[0], rounds: int = FOLD[1], gain: float = FOLD[2]) -> np.ndarray:
+    """(V,) from 0 to 1: how near a vertex is to a face among the ``cloth`` vertices whose copy
+    moved ``reach`` out along the unit vertex ``normals`` turns over (where the body curves
+    tighter than that), by ``rounds`` of taking the larger of a vertex's weight and its
+    neighbours' mean (``mean``, row-normalised adjacency), times ``gain``, eased."""
+    a, b, c = (v[faces[:, k]] for k in range(3))
+    w = v + reach * normals
+    turned = (np.cross(b - a, c - a) * np.cross(w[faces[:, 1]] - w[faces[:, 0]], w[faces[:, 2]] - w[faces[:, 0]])).sum(1) < 0
+    weight = np.zeros(len(v))
+    weight[faces[turned & cloth[faces].all(1)].ravel()] = 1.0
+    for _ in range(rounds):
+        weight = np.maximum(weight, mean @ weight)
+    t = np.clip(gain * weight, 0.0, 1.0)
+    return t * t * (3 - 2 * t)
 
 
 def body_regions(body) -> BodyRegions:
@@ -440,7 +468,10 @@ def body_regions(body) -> BodyRegions:
     ring = v[(group == "head") & (np.abs(v[:, 1] - neck_y - 0.03) < 0.01)][:, [0, 2]]
     centre = ring.mean(0)
     normals = vertex_normals(v, body.faces)
-    return BodyRegions(group, normals, offset_directions(v, body.faces, normals, crotch_y, waist_y + OFFSET_BLEND), arm_s, leg_s,
+    outward = offset_directions(v, body.faces, normals, crotch_y, waist_y + OFFSET_BLEND,
+                                float(sk.rest_positions[sk.index("upperarm01.L"), 1]) - FOLD[3],
+                                np.isin(group, ["torso", "upperarm", "lowerarm"]))
+    return BodyRegions(group, normals, outward, arm_s, leg_s,
                        float(np.mean(arm_len)), float(np.mean(leg_len)),
                        waist_y=waist_y, hip_y=hip_y, crotch_y=crotch_y,
                        neck_y=neck_y, neck_xz=(float(centre[0]), float(centre[1])),
