@@ -24,7 +24,7 @@ from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_point
                                    lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
 from synmitsuba.body.textures import GarmentTextureParams
 from synmitsuba.body.topology import cut, largest_piece, refine, submesh, weld
-from synmitsuba.geometry import face_normals, unique_rows, vertex_normals
+from synmitsuba.geometry import face_cross, face_normals, unique_rows, vertex_normals
 from synmitsuba.schema import Choice, Nested, Number, Params, optional, spec
 from synmitsuba.scene.layers import Layer
 
@@ -415,12 +415,9 @@ def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low
     for _ in range(rounds):
         n = mean @ n
         n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    def ramp(t):
-        t = np.clip(t, 0.0, 1.0)
-        return t * t * (3 - 2 * t)
-    above = ramp((v[:, 1] - low) / blend)
-    t = np.maximum(above * ramp((high - v[:, 1]) / blend),
-                   above * ramp((top - v[:, 1]) / blend) * fold_prone(v, faces, normals, mean, cloth))
+    above = _ease((v[:, 1] - low) / blend)
+    t = np.maximum(above * _ease((high - v[:, 1]) / blend),
+                   above * _ease((top - v[:, 1]) / blend) * fold_prone(v, faces, normals, mean, cloth))
     n = normals + t[:, None] * (n - normals)
     return n / np.linalg.norm(n, axis=1, keepdims=True)
 
@@ -431,14 +428,17 @@ def fold_prone(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, mean, clot
     moved ``reach`` out along the unit vertex ``normals`` turns over (where the body curves
     tighter than that), by ``rounds`` of taking the larger of a vertex's weight and its
     neighbours' mean (``mean``, row-normalised adjacency), times ``gain``, eased."""
-    a, b, c = (v[faces[:, k]] for k in range(3))
-    w = v + reach * normals
-    turned = (np.cross(b - a, c - a) * np.cross(w[faces[:, 1]] - w[faces[:, 0]], w[faces[:, 2]] - w[faces[:, 0]])).sum(1) < 0
+    turned = (face_cross(v, faces) * face_cross(v + reach * normals, faces)).sum(1) < 0
     weight = np.zeros(len(v))
     weight[faces[turned & cloth[faces].all(1)].ravel()] = 1.0
     for _ in range(rounds):
         weight = np.maximum(weight, mean @ weight)
-    t = np.clip(gain * weight, 0.0, 1.0)
+    return _ease(gain * weight)
+
+
+def _ease(t: np.ndarray) -> np.ndarray:
+    """``t`` clipped to [0, 1] and eased in and out (smoothstep)."""
+    t = np.clip(t, 0.0, 1.0)
     return t * t * (3 - 2 * t)
 
 
