@@ -50,6 +50,14 @@ OFFSET_BLEND = 0.04    # metres over which the averaged normals take over from t
 # the armpits, the inner elbows), spread over neighbours FOLD[1] rounds and scaled by FOLD[2]: tops
 # stand off along the averaged normals there too, from the crotch's height to FOLD[3] under the shoulders'
 FOLD = (0.05, 8, 3.0, 0.04)
+# a top's room beside the armpits (``free_room``): probed at ROOM[0] x ROOM[1]**k metres out (k < ROOM[2],
+# to ~10 cm); a shell takes up to ROOM[3] of the distance to the first probe in another part's reach,
+# a room that grows at most ROOM[4] metres per metre over the skin away from its tightest point; it
+# hangs out (``drape``) into at most ROOM[5] of the room it leaves (less for the top under: they nest)
+ROOM = (0.016, 1.2, 11, 0.75, 0.5, 0.5)
+ROOM_NONE = 1.0  # metres: the room where there is no limit (finite: it is interpolated)
+ROOM_FREE = 0.15  # metres of room over which no top is scaled (1.5 x the loosest's offset, ~10 cm)
+ROOM_EDGE = 0.03  # metres: the longest edge of the body's mesh near the armpits, at most (vertices stand for faces)
 # a skirt's weights: from the hip line's own down to both legs' over this drop (metres), and a point
 # this share of its ring's radius to one side of the centre follows that side's leg alone
 LEGS_BLEND, LEGS_SIDE = 0.08, 0.7
@@ -394,6 +402,8 @@ class BodyRegions:
     neck_radius: float = 0.06    # and its radius there (75th percentile: the outer surface)
     shoulder: tuple = (0.17, 1.4)  # the shoulder joints' |x| from the neck's axis and height, metres
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
+    room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
+    widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -442,6 +452,86 @@ def _ease(t: np.ndarray) -> np.ndarray:
     return t * t * (3 - 2 * t)
 
 
+def free_room(body, directions: np.ndarray, where: np.ndarray, part: np.ndarray) -> np.ndarray:
+    """(V,) metres a top may stand off each vertex ``where`` (a mask) along ``directions``
+    before its shell runs into another part's: ``ROOM[3]`` of the first probe out along it
+    that is nearer to another ``part`` (V,) of the skin than it is to its own vertex (beside the
+    armpit, the arm's underside over the torso's flank, the flank under the arm), spread
+    (``spread_room``); inf where no probe is. A jacket's shells (67 mm off) met there in the rest
+    pose and went through each other: faces turned to the body by the hundred, a black notch
+    in the armpit with an arm raised. Hollows within one part (under the bust) are left to
+    ``fold_prone`` and ``drape``: spread from there, a room held a jacket in over the whole chest."""
+    from pykdtree.kdtree import KDTree
+    v, index = body.vertices, body.surface()
+    others = {k: KDTree(np.ascontiguousarray(v[part != k], dtype=np.float64)) for k in np.unique(part)}
+    ids = np.flatnonzero(where)
+    room = np.full(len(v), np.inf)
+    for s in ROOM[0] * ROOM[1] ** np.arange(ROOM[2]):
+        p = v[ids] + s * directions[ids]
+        near = np.full(len(ids), np.inf)  # the nearest vertex of another part: the skin is no nearer than an edge less
+        for k, tree in others.items():
+            mine = part[ids] == k
+            near[mine] = tree.query(p[mine])[0]
+        look = np.flatnonzero(near < s + ROOM_EDGE)
+        if not len(look):
+            continue
+        closest, tri, bary = index.closest(p[look])
+        hit = look[(np.linalg.norm(p[look] - closest, axis=1) < s) & (part[body.faces[tri, bary.argmax(1)]] != part[ids[look]])]
+        room[ids[hit]] = ROOM[3] * s
+        ids = np.delete(ids, hit)
+    room = spread_room(room, v, body.faces)
+    return np.where(room < ROOM_FREE, room, np.inf)  # where ``fit_offset`` leaves every top as it is
+
+
+def spread_room(room: np.ndarray, v: np.ndarray, faces: np.ndarray, slope: float = ROOM[4]) -> np.ndarray:
+    """``room`` (V,) lowered so it grows at most ``slope`` metres per metre along the mesh's
+    edges: a shell eases out of a tight spot instead of stepping out of it. The least over the
+    tight spots of their room plus ``slope`` times the path to them (Dijkstra from one node
+    joined to each by its room over ``slope``)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+    tight = np.flatnonzero(np.isfinite(room))
+    if not len(tight):
+        return room.copy()
+    e = unique_rows(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1))
+    n = len(v)
+    a = np.concatenate([e[:, 0], np.full(len(tight), n)])
+    b = np.concatenate([e[:, 1], tight])
+    w = np.concatenate([np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1), room[tight] / slope])
+    graph = coo_matrix((w, (a, b)), shape=(n + 1, n + 1)).tocsr()
+    return slope * dijkstra(graph, directed=False, indices=n)[:n]
+
+
+def fit_offset(offset: float, room: np.ndarray, widest: float) -> np.ndarray:
+    """A shell's offset at each point: ``offset`` scaled by as much as the ``widest`` top's
+    (the loosest worn over the same body) must be to stay within ``room`` (min(room / widest, 1),
+    eased from 0.5 to 1.5 x): tops worn one over the other keep their order and their share of
+    the room. Eased down to the room each alone, a jacket came within 0.3 mm of the shirt under
+    it at the armpit, and the shirt showed through it with the arm raised. Exactly ``offset``
+    where the room is 1.5 x ``widest`` or more."""
+    t = room / widest
+    fit = np.where(t <= 0.5, t, np.where(t < 1.5, t - 0.5 * (t - 0.5) ** 2, 1.0))
+    return offset * fit
+
+
+def outfit_widest(r: BodyRegions, garments) -> float:
+    """The offset of the loosest top or dress among ``garments`` (``GarmentParams``) as
+    ``build_garment`` stands them off this body, each outside the ones before it."""
+    below, widest = 0.0, 0.0
+    for g in sorted(garments, key=lambda g: GARMENTS[g.kind].order):
+        kind = GARMENTS[g.kind]
+        if kind.footwear:
+            continue
+        below = garment_offset(g, below, _fit(kind, g, r))
+        widest = max(widest, below) if kind.layer in (Layer.TOP, Layer.DRESS) else widest
+    return widest
+
+
+def _fit(kind: GarmentKind, g: GarmentParams, r: BodyRegions) -> Fit | None:
+    """A graded garment's size on this body (None for an ungraded one or footwear)."""
+    return garment_fit(kind.layer, g.grade, r.girths) if g.grade is not None and r.girths and not kind.footwear else None
+
+
 def body_regions(body) -> BodyRegions:
     sk = body.skeleton
     bones = np.array([next((g for g, keys in GROUPS.items() if any(k in name for k in keys)), "torso")
@@ -471,6 +561,8 @@ def body_regions(body) -> BodyRegions:
     outward = offset_directions(v, body.faces, normals, crotch_y, waist_y + OFFSET_BLEND,
                                 float(sk.rest_positions[sk.index("upperarm01.L"), 1]) - FOLD[3],
                                 np.isin(group, ["torso", "upperarm", "lowerarm"]))
+    arm = np.isin(group, ["upperarm", "lowerarm", "hand"])
+    room = free_room(body, outward, np.isin(group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > waist_y), arm)
     return BodyRegions(group, normals, outward, arm_s, leg_s,
                        float(np.mean(arm_len)), float(np.mean(leg_len)),
                        waist_y=waist_y, hip_y=hip_y, crotch_y=crotch_y,
@@ -478,7 +570,7 @@ def body_regions(body) -> BodyRegions:
                        neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)),
                        shoulder=(float(np.mean([abs(sk.rest_positions[sk.index(f"upperarm01.{s}"), 0] - centre[0])
                                                 for s in "LR"])), float(sk.rest_positions[sk.index("upperarm01.L"), 1])),
-                       girths=measure_girths(v, group, crotch_y, waist_y, armpit_y))
+                       girths=measure_girths(v, group, crotch_y, waist_y, armpit_y), room=room)
 
 
 def sample_skirt_cut(g: GarmentParams) -> GarmentParams:
@@ -753,18 +845,24 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
     return p
 
 
-def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float):
+def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float, room: np.ndarray | None = None,
+               widest: float = 0.0):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
-    along). Only the cut's largest piece is kept: where a region's field dips back over zero
-    past its edge (a tank's arms, cut by its armholes, left a patch of 13-29 points under each
-    armpit on 5 of 16 subjects) the patch would ride on the arm skinned, and fall away simulated."""
+    along, the room each has left over its offset). Only the cut's largest piece is kept: where
+    a region's field dips back over zero past its edge (a tank's arms, cut by its armholes, left
+    a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
+    arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when given,
+    scales the offset down where it is tight (``fit_offset``, as the ``widest`` top's, or this
+    one's if it is wider); without it the offset is exact and the room ``ROOM_NONE``."""
     src = split.source
-    f, p, n, uv = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv)
+    limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
+    f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv, limit[src, None])
     used, f = submesh(f, largest_piece(p, f))
-    p, n, uv = p[used], n[used], uv[used]
+    p, n, uv, limit = p[used], n[used], uv[used], limit[used, 0]
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    return p + n * offset, f, uv, n
+    off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, max(widest, offset))
+    return p + n * off[:, None], f, uv, n, limit - off
 
 
 @dataclass
@@ -893,14 +991,15 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     of the back and the belly, and draped."""
     kind = GARMENTS[g.kind]
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
-    v, f, uv, out = _cut_shell(body, split, _region(kind)(cut, r, body.vertices), r.outward if loose else r.normals, offset)
+    v, f, uv, out, spare = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
+                                      r.outward if loose else r.normals, offset, r.room if loose else None, r.widest)
     v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:
         slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
         torso = _over_torso(body, r, v)
         low_back = torso & (v[:, 1] > r.crotch_y) & (v[:, 1] < r.waist_y + 2 * OFFSET_BLEND)
         v = bridge(v, f, out, low_back, offset)
-        v = drape(v, f, torso, slope)
+        v = drape(v, f, torso, slope, spare=ROOM[5] * spare)
         v = smooth_openings(v, f)
     return v, f, uv
 
@@ -1124,7 +1223,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
     would otherwise run inside the skirt's flare and show through it in notches). ``density``: a ``dense`` shape's
     hanging cloth that many times finer each way (``SIMULATED_DENSITY`` for the cloth stage)."""
     kind = GARMENTS[g.kind]
-    fit = garment_fit(kind.layer, g.grade, r.girths) if g.grade is not None and r.girths and not kind.footwear else None
+    fit = _fit(kind, g, r)
     offset = garment_offset(g, below, fit)
     cut_for = _cut_longer(g, g.grade or 0) if fit is not None else g  # (fit: g is graded)
     shape = cut_for
@@ -1266,14 +1365,17 @@ def _along_openings(edges: np.ndarray, n_v: int) -> tuple[np.ndarray, np.ndarray
 
 
 def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, rounds: int = 40,
-          soften: int = SOFTEN) -> np.ndarray:
+          soften: int = SOFTEN, spare: np.ndarray | None = None) -> np.ndarray:
     """Cloth that hangs: going down an edge, a ``hanging`` vertex may come in towards the body
     by at most ``slope`` times the drop (measured along its horizontal outward normal), so a
     loose top falls from the chest and the shoulder blades over the underbust, the navel and
     the small of the back instead of following them like paint (a shell offset along the
     normals keeps every hollow of the skin). ``rounds`` edges is how far a hang reaches; then
     ``soften`` rounds of averaging the lift over neighbours round the ledge it leaves. Seam
-    copies of a vertex (the render topology splits at UV seams) move as one: no crack opens."""
+    copies of a vertex (the render topology splits at UV seams) move as one: no crack opens.
+    ``spare`` (N,), when given, caps how far each vertex moves out (``free_room``'s room left
+    over its offset): hung from the shoulder, the cloth in front of and behind the armpit went
+    out into the sleeve's."""
     rep = weld(v)
     ff = rep[f]
     edges = unique_rows(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]))
@@ -1285,14 +1387,16 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
     a, b = up.T
     out = np.zeros(len(p))  # how far each vertex moves out along n
+    cap = np.inf if spare is None else spare[rep]
     for _ in range(rounds):
         q = p + out[:, None] * n
         need = np.einsum("ij,ij->i", q[a] - q[b], n[b]) - slope * (q[a, 1] - q[b, 1])
         lift = np.zeros(len(p))
         np.maximum.at(lift, b, need)
+        lift = np.minimum(np.clip(lift, 0.0, None), cap - out)
         if lift.max() <= 1e-5:
             break
-        out += np.clip(lift, 0.0, None)
+        out += lift
     mean = neighbour_mean(ff, len(p))
     for _ in range(soften):  # where the fall leaves the chest, a rounded fold, not a ledge
         out = mean @ out

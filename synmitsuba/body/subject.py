@@ -17,7 +17,8 @@ from synmitsuba.body.expressions import face_units
 from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSITY, BodyRegions, GarmentMesh,
-                                      body_regions, build_garment, footwear_lift, heel_pitches, metres_per_uv)
+                                      body_regions, build_garment, footwear_lift, heel_pitches, metres_per_uv,
+                                      outfit_widest)
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.face_shape import with_face_shape
@@ -135,6 +136,8 @@ class LayeredHuman:
         self.garments: list[GarmentMesh] = []
         self._panel_frame: PanelFrame | None = None  # built for the first garment laid on panels
         below = 0.0
+        # tops over each other scale alike where the arm is near (``free_room``): by the loosest's offset
+        self.regions = dataclasses.replace(self.regions, widest=outfit_widest(self.regions, recipe.garments))
         tuck = any(GARMENTS[x.kind].tucks_tops for x in recipe.garments)
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
             footwear = GARMENTS[g.kind].footwear
