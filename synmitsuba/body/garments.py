@@ -849,20 +849,23 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
                widest: float = 0.0):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
-    along, the room each has left over its offset). Only the cut's largest piece is kept: where
-    a region's field dips back over zero past its edge (a tank's arms, cut by its armholes, left
-    a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
-    arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when given,
-    scales the offset down where it is tight (``fit_offset``, as the ``widest`` top's, or this
-    one's if it is wider); without it the offset is exact and the room ``ROOM_NONE``."""
+    along, the room each has left over its offset where that scales it, ``ROOM_NONE``
+    elsewhere). Only the cut's largest piece is kept: where a region's field dips back over
+    zero past its edge (a tank's arms, cut by its armholes, left a patch of 13-29 points under
+    each armpit on 5 of 16 subjects) the patch would ride on the arm skinned, and fall away
+    simulated. ``room`` (per body vertex, ``free_room``), when given, scales the offset down
+    where it is tight (``fit_offset``, as the ``widest`` top's, or this one's if it is wider);
+    without it the offset is exact."""
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
     f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv, limit[src, None])
     used, f = submesh(f, largest_piece(p, f))
     p, n, uv, limit = p[used], n[used], uv[used], limit[used, 0]
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, max(widest, offset))
-    return p + n * off[:, None], f, uv, n, limit - off
+    widest = max(widest, offset)
+    off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
+    scaled = limit < 1.5 * widest  # where fit_offset scales it
+    return p + n * off[:, None], f, uv, n, np.where(scaled, limit - off, ROOM_NONE)
 
 
 @dataclass
@@ -1374,8 +1377,10 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
     ``soften`` rounds of averaging the lift over neighbours round the ledge it leaves. Seam
     copies of a vertex (the render topology splits at UV seams) move as one: no crack opens.
     ``spare`` (N,), when given, caps how far each vertex moves out (``free_room``'s room left
-    over its offset): hung from the shoulder, the cloth in front of and behind the armpit went
-    out into the sleeve's."""
+    over its offset, beside the armpits): hung from the shoulder, the cloth in front of and
+    behind the armpit went out into the sleeve's. Capped wherever a room was measured (within
+    10-15 cm of an armpit), a t-shirt hung less from the shoulder blades, and its simulated
+    cloth turned down in a shelf under its held yoke."""
     rep = weld(v)
     ff = rep[f]
     edges = unique_rows(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]))

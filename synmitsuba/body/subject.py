@@ -136,8 +136,11 @@ class LayeredHuman:
         self.garments: list[GarmentMesh] = []
         self._panel_frame: PanelFrame | None = None  # built for the first garment laid on panels
         below = 0.0
-        # tops over each other scale alike where the arm is near (``free_room``): by the loosest's offset
-        self.regions = dataclasses.replace(self.regions, widest=outfit_widest(self.regions, recipe.garments))
+        # tops over each other scale alike where the arm is near (``free_room``): by the loosest's offset. Not
+        # for the cloth stage's rest shapes yet: a simulated t-shirt's back turned down under its held yoke
+        # (2-4 faces a frame from frame 3 of tests/test_cloth_tops.py's walk, none before)
+        self.regions = dataclasses.replace(self.regions, widest=outfit_widest(self.regions, recipe.garments),
+                                           room=None if recipe.cloth == "simulated" else self.regions.room)
         tuck = any(GARMENTS[x.kind].tucks_tops for x in recipe.garments)
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
             footwear = GARMENTS[g.kind].footwear
