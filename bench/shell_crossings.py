@@ -1,11 +1,11 @@
-"""Where a top's rest shell goes through itself (issue 34, realism): for the tops and dresses (layers TOP, DRESS)
-of subjects ``--first`` .. ``--first + --subjects - 1`` as ``sample_subject`` draws them, the faces
-of each shell (its turned-in band left out, merged by position) that an edge of another face
-not touching them passes through (Moller and Trumbore), counted beside the armpits (within
-0.1 m of the shoulder joints' reach either side of the neck's axis, up to 0.3 m under them),
-under the crotch's height + 4 cm (a long top's front and back meeting between the legs) and
-elsewhere (shirt collars' falls and hoods lie over their own shell by design). Prints JSON:
-per garment and totals by place.
+"""Where a top's rest shell goes through itself (issue 34, realism): for the tops and dresses
+(layers TOP, DRESS) of subjects ``--first`` .. ``--first + --subjects - 1`` as ``sample_subject``
+draws them, the faces of each shell (its turned-in band left out, merged by position) that an
+edge of another face not touching them passes through (tests/reference.py's ``self_crossing``),
+counted beside the armpits (within 0.1 m of the shoulder joints' reach either side of the neck's
+axis, up to 0.3 m under them), under the crotch's height + 4 cm (a long top's front and back
+meeting between the legs) and elsewhere (shirt collars' falls and hoods lie over their own shell
+by design). Prints JSON: per garment and totals by place.
 
     python bench/shell_crossings.py [--first 200] [--subjects 30]
 """
@@ -13,41 +13,20 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import sys
 
 import numpy as np
 
-def _through(p, q, a, b, c) -> np.ndarray:
-    """(N,) whether each segment p-q passes through the triangle a-b-c."""
-    d, e1, e2 = q - p, b - a, c - a
-    h = np.cross(d, e2)
-    det = (e1 * h).sum(1)
-    ok = np.abs(det) > 1e-14
-    inv = 1.0 / np.where(ok, det, 1.0)
-    s = p - a
-    u = (s * h).sum(1) * inv
-    k = np.cross(s, e1)
-    w = (d * k).sum(1) * inv
-    t = (e2 * k).sum(1) * inv
-    return ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (t >= 0) & (t <= 1)
-
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))  # reference.py
 
 def crossing_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(face centres (F, 3), whether each face crosses another of the mesh (F,))."""
+    """(face centres (F, 3), whether each face crosses another of the mesh (F,)), merged by
+    position (trimesh)."""
     import trimesh
-    from scipy.spatial import cKDTree
+    from reference import self_crossing
     mesh = trimesh.Trimesh(vertices, faces, process=True)
-    f, v, c = mesh.faces, mesh.vertices, mesh.triangles_center
-    reach = 2 * np.linalg.norm(v[f] - c[:, None], axis=2).max()
-    i, j = cKDTree(c).query_pairs(reach, output_type="ndarray").T
-    apart = ~(f[i][:, :, None] == f[j][:, None, :]).any((1, 2))
-    i, j = i[apart], j[apart]
-    hit = np.zeros(len(i), bool)
-    for x, y in ((i, j), (j, i)):
-        for k in range(3):
-            hit |= _through(v[f[x, k]], v[f[x, (k + 1) % 3]], v[f[y, 0]], v[f[y, 1]], v[f[y, 2]])
-    out = np.zeros(len(f), bool)
-    out[i[hit]] = out[j[hit]] = True
-    return c, out
+    return mesh.triangles_center, self_crossing(mesh.vertices, mesh.faces)
 
 
 def places(h, c: np.ndarray) -> np.ndarray:

@@ -70,6 +70,46 @@ def crossings(origin: np.ndarray, dirs: np.ndarray, tri: np.ndarray, reach: np.n
     return (inside & (t > 0) & (t < reach[:, None])).sum(1)
 
 
+def segments_through_triangles(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """(N,) whether each segment ``p``-``q`` (N, 3) passes through the triangle ``a``-``b``-``c``
+    (each (N, 3)): the barycentric hit of its line (Moller and Trumbore) within the triangle and
+    the segment."""
+    d, e1, e2 = q - p, b - a, c - a
+    h = np.cross(d, e2)
+    det = (e1 * h).sum(1)
+    ok = np.abs(det) > 1e-14
+    inv = 1.0 / np.where(ok, det, 1.0)
+    s = p - a
+    u = (s * h).sum(1) * inv
+    k = np.cross(s, e1)
+    w = (d * k).sum(1) * inv
+    t = (e2 * k).sum(1) * inv
+    return ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (t >= 0) & (t <= 1)
+
+
+def self_crossing(vertices: np.ndarray, faces: np.ndarray, among: np.ndarray | None = None) -> np.ndarray:
+    """(F,) whether each face (of those ``among``, a mask; all when None) passes through another
+    of them not touching it: an edge of one through the other (``segments_through_triangles``),
+    over the pairs whose centres are nearer than twice the farthest any corner is from its centre."""
+    from scipy.spatial import cKDTree
+    f, v = np.asarray(faces), np.asarray(vertices, dtype=np.float64)
+    c = v[f].mean(1)
+    ids = np.arange(len(f)) if among is None else np.flatnonzero(among)
+    out = np.zeros(len(f), bool)
+    if len(ids) < 2:
+        return out
+    reach = 2 * np.linalg.norm(v[f[ids]] - c[ids, None], axis=2).max()
+    i, j = ids[cKDTree(c[ids]).query_pairs(reach, output_type="ndarray").T]
+    apart = ~(f[i][:, :, None] == f[j][:, None, :]).any((1, 2))
+    i, j = i[apart], j[apart]
+    hit = np.zeros(len(i), bool)
+    for x, y in ((i, j), (j, i)):
+        for k in range(3):
+            hit |= segments_through_triangles(v[f[x, k]], v[f[x, (k + 1) % 3]], v[f[y, 0]], v[f[y, 1]], v[f[y, 2]])
+    out[i[hit]] = out[j[hit]] = True
+    return out
+
+
 def unit_weights(**units: float) -> np.ndarray:
     """The 52 ARKit face unit weights with the named ones set (``jawOpen=0.7``), the rest 0."""
     from synmitsuba.body.expressions import FACE_UNITS

@@ -361,40 +361,17 @@ def test_a_loose_top_does_not_fold_over_itself_under_the_chest():
         assert _turned_under_the_chest(h, g) <= most, (seed, kind, _turned_under_the_chest(h, g))
 
 
-def _segments_through_triangles(p, q, a, b, c) -> np.ndarray:
-    """(N,) whether each segment p-q passes through the triangle a-b-c (Moller and Trumbore)."""
-    d, e1, e2 = q - p, b - a, c - a
-    h = np.cross(d, e2)
-    det = (e1 * h).sum(1)
-    ok = np.abs(det) > 1e-14
-    inv = 1.0 / np.where(ok, det, 1.0)
-    s = p - a
-    u = (s * h).sum(1) * inv
-    k = np.cross(s, e1)
-    w = (d * k).sum(1) * inv
-    t = (e2 * k).sum(1) * inv
-    return ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (t >= 0) & (t <= 1)
-
-
 def _crossing_beside_the_armpits(h, g) -> int:
     """Faces of garment ``g``'s shell (its band left out, merged by position: trimesh) within
     0.1 m of the shoulder joints' reach either side of the neck's axis and up to 0.3 m under
-    them, that pass through another face of the shell not touching them (an edge of one
-    through the other)."""
-    from scipy.spatial import cKDTree
+    them, that pass through another face of the shell there not touching them
+    (``reference.self_crossing``)."""
+    from reference import self_crossing
     mesh = trimesh.Trimesh(g.vertices, g.faces[:len(g.faces) - g.hem[0]], process=True)
-    f, v, c, r = mesh.faces, mesh.vertices, mesh.triangles_center, h.regions
+    c, r = mesh.triangles_center, h.regions
     beside = np.abs(np.abs(c[:, 0] - r.neck_xz[0]) - r.shoulder[0]) < 0.1
-    ids = np.flatnonzero(beside & (c[:, 1] > r.shoulder[1] - 0.3) & (c[:, 1] < r.shoulder[1]))
-    reach = 2 * np.linalg.norm(v[f[ids]] - c[ids, None], axis=2).max()
-    i, j = ids[cKDTree(c[ids]).query_pairs(reach, output_type="ndarray").T]
-    apart = ~(f[i][:, :, None] == f[j][:, None, :]).any((1, 2))
-    i, j = i[apart], j[apart]
-    through = np.zeros(len(i), bool)
-    for x, y in ((i, j), (j, i)):
-        for k in range(3):
-            through |= _segments_through_triangles(v[f[x, k]], v[f[x, (k + 1) % 3]], v[f[y, 0]], v[f[y, 1]], v[f[y, 2]])
-    return len(np.unique(np.concatenate([i[through], j[through]])))
+    return int(self_crossing(mesh.vertices, mesh.faces, beside & (c[:, 1] > r.shoulder[1] - 0.3)
+                             & (c[:, 1] < r.shoulder[1])).sum())
 
 
 def test_a_loose_tops_sleeve_and_side_meet_at_the_armpit_without_crossing():
