@@ -514,6 +514,19 @@ def fit_offset(offset: float, room: np.ndarray, widest: float) -> np.ndarray:
     return offset * fit
 
 
+def dress_regions(body, r: BodyRegions, garments, room: bool = True) -> BodyRegions:
+    """``r`` for an outfit of ``garments``: its loosest top's offset (``outfit_widest``) and,
+    with ``room`` and a top worn, the room beside the armpits (``free_room``, over the torso and
+    arms above the waist) that tops scale to. ``body`` is the body ``r`` was measured on."""
+    widest = outfit_widest(r, garments)
+    if not (room and widest):
+        return dataclasses.replace(r, widest=widest)
+    v = body.vertices
+    probed = np.isin(r.group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > r.waist_y)
+    return dataclasses.replace(r, widest=widest, room=free_room(body, r.outward, probed,
+                                                                np.isin(r.group, ["upperarm", "lowerarm", "hand"])))
+
+
 def outfit_widest(r: BodyRegions, garments) -> float:
     """The offset of the loosest top or dress among ``garments`` (``GarmentParams``) as
     ``build_garment`` stands them off this body, each outside the ones before it."""
@@ -561,8 +574,6 @@ def body_regions(body) -> BodyRegions:
     outward = offset_directions(v, body.faces, normals, crotch_y, waist_y + OFFSET_BLEND,
                                 float(sk.rest_positions[sk.index("upperarm01.L"), 1]) - FOLD[3],
                                 np.isin(group, ["torso", "upperarm", "lowerarm"]))
-    arm = np.isin(group, ["upperarm", "lowerarm", "hand"])
-    room = free_room(body, outward, np.isin(group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > waist_y), arm)
     return BodyRegions(group, normals, outward, arm_s, leg_s,
                        float(np.mean(arm_len)), float(np.mean(leg_len)),
                        waist_y=waist_y, hip_y=hip_y, crotch_y=crotch_y,
@@ -570,7 +581,7 @@ def body_regions(body) -> BodyRegions:
                        neck_radius=float(np.percentile(np.linalg.norm(ring - centre, axis=1), 75)),
                        shoulder=(float(np.mean([abs(sk.rest_positions[sk.index(f"upperarm01.{s}"), 0] - centre[0])
                                                 for s in "LR"])), float(sk.rest_positions[sk.index("upperarm01.L"), 1])),
-                       girths=measure_girths(v, group, crotch_y, waist_y, armpit_y), room=room)
+                       girths=measure_girths(v, group, crotch_y, waist_y, armpit_y))
 
 
 def sample_skirt_cut(g: GarmentParams) -> GarmentParams:

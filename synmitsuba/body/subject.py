@@ -17,8 +17,8 @@ from synmitsuba.body.expressions import face_units
 from synmitsuba.body.eyes import CORNEA_BULGE, Eyeballs, eye_material, eyeball_meshes, fit_eyeballs, helper_vertices, hide_helpers
 from synmitsuba.body.collide import GarmentCollider, Surface, cover_heights, incidence
 from synmitsuba.body.garments import (GARMENT_SHAPES, GARMENTS, SIMULATED_DENSITY, BodyRegions, GarmentMesh,
-                                      body_regions, build_garment, footwear_lift, heel_pitches, metres_per_uv,
-                                      outfit_widest)
+                                      body_regions, build_garment, dress_regions, footwear_lift, heel_pitches,
+                                      metres_per_uv)
 from synmitsuba.body.shoes import HeelPitch, pitch_feet
 from synmitsuba.body.face_points import face_rows
 from synmitsuba.body.face_shape import with_face_shape
@@ -110,7 +110,12 @@ class LayeredHuman:
         body.vertices = body.vertices + [0, lift, 0]
         body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
                                             body.skeleton.rest_positions + [0, lift, 0])
-        self.regions: BodyRegions = body_regions(body)  # on the lifted body: hems at heights over its soles
+        # on the lifted body: hems at heights over its soles. Tops over each other scale alike where the arm is
+        # near (``free_room``), by the loosest's offset; not the cloth stage's rest shapes yet: a simulated
+        # t-shirt's back turned down under its held yoke (2-4 faces a frame from frame 3 of
+        # tests/test_cloth_tops.py's walk, none before)
+        self.regions: BodyRegions = dress_regions(body, body_regions(body), recipe.garments,
+                                                  room=recipe.cloth != "simulated")
         # the face shape after the regions (clothes are cut for the body's phenotypes; the neck's measuring
         # ring reaches under the jaw), and above the neck alone
         unshaped = body.vertices
@@ -136,11 +141,6 @@ class LayeredHuman:
         self.garments: list[GarmentMesh] = []
         self._panel_frame: PanelFrame | None = None  # built for the first garment laid on panels
         below = 0.0
-        # tops over each other scale alike where the arm is near (``free_room``): by the loosest's offset. Not
-        # for the cloth stage's rest shapes yet: a simulated t-shirt's back turned down under its held yoke
-        # (2-4 faces a frame from frame 3 of tests/test_cloth_tops.py's walk, none before)
-        self.regions = dataclasses.replace(self.regions, widest=outfit_widest(self.regions, recipe.garments),
-                                           room=None if recipe.cloth == "simulated" else self.regions.room)
         tuck = any(GARMENTS[x.kind].tucks_tops for x in recipe.garments)
         for g in sorted(recipe.garments, key=lambda g: GARMENTS[g.kind].order):
             footwear = GARMENTS[g.kind].footwear
