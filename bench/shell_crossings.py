@@ -5,7 +5,10 @@ edge of another face not touching them passes through (tests/reference.py's ``se
 counted beside the armpits (within 0.1 m of the shoulder joints' reach either side of the neck's
 axis, up to 0.3 m under them), under the crotch's height + 4 cm (a long top's front and back
 meeting between the legs) and elsewhere (shirt collars' falls and hoods lie over their own shell
-by design). Prints JSON: per garment and totals by place.
+by design). For a top (not a coat: its skirt is a flare) reaching 4 cm under the crotch, also how far behind its own front (back) it
+lies seen straight on at the middle between the legs under the crotch (``reference.middle_notch``:
+a shell of each thigh left a notch there; inf where another layer shows through). Prints JSON:
+per garment, totals by place, and the notches' median and largest.
 
     python bench/shell_crossings.py [--first 200] [--subjects 30]
 """
@@ -17,6 +20,9 @@ import os
 import sys
 
 import numpy as np
+
+from synmitsuba.body.garments import GARMENTS
+from synmitsuba.scene.layers import Layer
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))  # reference.py
 
@@ -39,13 +45,12 @@ def places(h, c: np.ndarray) -> np.ndarray:
 
 def main() -> None:
     import synmitsuba as sm
-    from synmitsuba.scene.layers import Layer
-    loose = {k for k, kind in sm.GARMENT_KINDS.items() if kind.layer in (Layer.TOP, Layer.DRESS)}
+    loose = {k for k, kind in GARMENTS.items() if kind.layer in (Layer.TOP, Layer.DRESS)}
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--first", type=int, default=200)
     ap.add_argument("--subjects", type=int, default=30)
     a = ap.parse_args()
-    rows, total = [], {"armpits": 0, "crotch": 0, "elsewhere": 0}
+    rows, total, notches = [], {"armpits": 0, "crotch": 0, "elsewhere": 0}, []
     for seed in range(a.first, a.first + a.subjects):
         h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64}))
         for g in h.garments:
@@ -55,11 +60,35 @@ def main() -> None:
             where = places(h, c[bad])
             row = {"seed": seed, "kind": g.params.kind, "offset_mm": round(g.offset * 1000, 1),
                    "faces": int(len(c))} | {k: int((where == k).sum()) for k in total}
+            shell = GARMENTS[g.params.kind].shape in ("shell", "shell+collar", "shell+hood")  # not a coat's skirt
+            if shell and GARMENTS[g.params.kind].layer == Layer.TOP and g.vertices[:, 1].min() < h.regions.crotch_y - 0.04:
+                row["middle_notch_mm"] = notch_mm(h, g)
+                notches.append(row["middle_notch_mm"])
             for k in total:
                 total[k] += row[k]
             rows.append(row)
     print(json.dumps({"subjects": a.subjects, "first": a.first, "garments": len(rows), "crossing_faces": total,
+                      "middle_notch_mm": {"tops": len(notches), "another_layer_first": notches.count(None),
+                                          "median": _median([n for n in notches if n is not None]),
+                                          "largest": max((n for n in notches if n is not None), default=None)},
                       "rows": rows}, indent=1))
+
+
+def _median(x: list) -> float | None:
+    return float(np.median(x)) if x else None
+
+
+def notch_mm(h, g) -> float | None:
+    """``reference.middle_notch`` of garment ``g`` on subject ``h`` at rest, in millimetres (None
+    where another layer shows first; garments over it left out), the middle between the legs
+    the thighs' mean x."""
+    from reference import middle_notch
+    y = h.body.vertices[:, 1] - h.regions.crotch_y
+    middle = float(h.body.vertices[(y < -0.05) & (y > -0.25), 0].mean())
+    k = h.garments.index(g)  # it and what is under it: a shirt under a blazer is its own shape
+    layers = [(h.body.vertices, h.body.faces)] + [(m.vertices, m.faces) for m in h.garments[:k + 1]]
+    notch = middle_notch(layers, 1 + k, middle, h.regions.crotch_y)
+    return round(1000 * notch, 1) if np.isfinite(notch) else None
 
 
 if __name__ == "__main__":

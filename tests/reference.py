@@ -70,6 +70,44 @@ def crossings(origin: np.ndarray, dirs: np.ndarray, tri: np.ndarray, reach: np.n
     return (inside & (t > 0) & (t < reach[:, None])).sum(1)
 
 
+def first_hits(origins: np.ndarray, direction: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Distance along the unit ``direction`` (3,) from each of ``origins`` (N, 3) to the nearest
+    of the triangles (M, 3, 3) it meets, inf where none (Moller-Trumbore), written for the tests."""
+    if not len(tri):
+        return np.full(len(origins), np.inf)
+    a, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    pv = np.cross(direction, e2)
+    det = np.einsum("mi,mi->m", e1, pv)
+    inv = np.where(np.abs(det) > 1e-14, 1.0 / np.where(np.abs(det) > 1e-14, det, 1.0), 0.0)
+    tv = origins[:, None, :] - a[None]
+    u = np.einsum("nmi,mi->nm", tv, pv) * inv
+    qv = np.cross(tv, e1[None])
+    v = (qv @ direction) * inv
+    t = np.einsum("nmi,mi->nm", qv, e2) * inv
+    hit = (inv != 0) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    return np.where(hit, t, np.inf).min(1)
+
+
+def middle_notch(layers: list, top: int, middle: float, crotch: float) -> float:
+    """Metres the top (``layers[top]``; layers are (vertices, faces), the body first), seen
+    straight on from the front and from behind at the middle between the legs (x = ``middle``
+    and 1 cm either side), lies behind its own front-most (back-most) point within 8 cm of that
+    middle, at each height from 1 cm under the ``crotch`` to 1.5 cm over its hem there, at
+    most; inf if another layer is met first (``first_hits``)."""
+    v = layers[top][0]
+    worst = 0.0
+    for side in (1.0, -1.0):
+        near = np.abs(v[:, 0] - middle) < 0.08
+        for y in np.arange(crotch - 0.01, v[near & (np.abs(v[:, 0] - middle) < 0.05), 1].min() + 0.015, -0.01):
+            o = np.array([[middle + dx, y, side] for dx in (-0.01, 0.0, 0.01)])
+            dist = np.array([first_hits(o, np.array([0.0, 0.0, -side]), w[f][(w[f][:, :, 1].min(1) <= y)
+                                                                           & (w[f][:, :, 1].max(1) >= y)])
+                             for w, f in layers])
+            front = (side * v[near & (np.abs(v[:, 1] - y) < 0.01), 2]).max()
+            worst = max(worst, np.inf if (dist.argmin(0) != top).any() else float(front - (1.0 - dist[top].max())))
+    return worst
+
+
 def segments_through_triangles(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """(N,) whether each segment ``p``-``q`` (N, 3) passes through the triangle ``a``-``b``-``c``
     (each (N, 3)): the barycentric hit of its line (Moller and Trumbore) within the triangle and

@@ -57,6 +57,17 @@ FOLD = (0.05, 8, 3.0, 0.04)
 ROOM = (0.016, 1.2, 11, 0.75, 0.5, 0.5)
 ROOM_NONE = 1.0  # metres: the room where there is no limit (finite: it is interpolated)
 ROOM_FREE = 0.15  # metres of room over which no top is scaled (1.5 x the loosest's offset, ~10 cm)
+# a top under the crotch (``hang_across``): metres over the crotch it starts to hang across both legs;
+# metres over which it comes to (in full from the crotch down); metres between the heights it is
+# measured at (each over twice that up and down); metres off the middle between the legs each half
+# stays (none: the halves meet on one plane; apart, a slit showed between them; overlapping, the
+# faces either side of the middle crossed); metres short of the front and back over which points
+# put on the middle close in on them (``_within``); the share of its way to the front or back a
+# point on the middle next to them is left (``_into_corners``)
+ACROSS = (0.08, 0.08, 0.01, 0.0, 0.001, 0.03)
+ACROSS_PART = 0.02  # metres either side of the crotch over which points move out from each half's centre, not both's
+ACROSS_ANGLES = 90  # directions round each thigh the hull's reach is measured in
+ACROSS_SIDE = 0.15  # share of the radius either side of the middle over which it follows both legs (``across_weights``)
 ROOM_EDGE = 0.03  # metres: the longest edge of the body's mesh near the armpits, at most (vertices stand for faces)
 # a skirt's weights: from the hip line's own down to both legs' over this drop (metres), and a point
 # this share of its ring's radius to one side of the centre follows that side's leg alone
@@ -404,6 +415,7 @@ class BodyRegions:
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
     room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
     widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
+    across: bool = False  # tops hang across both legs under the crotch (``hang_across``), not round each thigh
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -517,13 +529,14 @@ def fit_offset(offset: float, room: np.ndarray, widest: float) -> np.ndarray:
 def dress_regions(body, r: BodyRegions, garments, room: bool = True) -> BodyRegions:
     """``r`` for an outfit of ``garments``: its loosest top's offset (``outfit_widest``) and,
     with ``room`` and a top worn, the room beside the armpits (``free_room``, over the torso and
-    arms above the waist) that tops scale to. ``body`` is the body ``r`` was measured on."""
+    arms above the waist) that tops scale to, and tops hanging across both legs under the crotch
+    (``hang_across``). ``body`` is the body ``r`` was measured on."""
     widest = outfit_widest(r, garments)
     if not (room and widest):
         return dataclasses.replace(r, widest=widest)
     v = body.vertices
     probed = np.isin(r.group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > r.waist_y)
-    return dataclasses.replace(r, widest=widest, room=free_room(body, r.outward, probed,
+    return dataclasses.replace(r, widest=widest, across=True, room=free_room(body, r.outward, probed,
                                                                 np.isin(r.group, ["upperarm", "lowerarm", "hand"])))
 
 
@@ -861,10 +874,10 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
     along, the room each has left over its offset where that scales it, ``ROOM_NONE``
-    elsewhere). Only the cut's largest piece is kept: where a region's field dips back over
-    zero past its edge (a tank's arms, cut by its armholes, left a patch of 13-29 points under
-    each armpit on 5 of 16 subjects) the patch would ride on the arm skinned, and fall away
-    simulated. ``room`` (per body vertex, ``free_room``), when given, scales the offset down
+    elsewhere, the body points they stood off). Only the cut's largest piece is kept: where a
+    region's field dips back over zero past its edge (a tank's arms, cut by its armholes, left
+    a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
+    arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when given, scales the offset down
     where it is tight (``fit_offset``, as the ``widest`` top's, or this one's if it is wider);
     without it the offset is exact."""
     src = split.source
@@ -876,7 +889,7 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     widest = max(widest, offset)
     off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
     scaled = limit < 1.5 * widest  # where fit_offset scales it
-    return p + n * off[:, None], f, uv, n, np.where(scaled, limit - off, ROOM_NONE)
+    return p + n * off[:, None], f, uv, n, np.where(scaled, limit - off, ROOM_NONE), p
 
 
 @dataclass
@@ -971,6 +984,165 @@ def hang_legs(body, r: BodyRegions, v: np.ndarray, taper: tuple[float, float]) -
     return out
 
 
+def _hull_reach(points: np.ndarray, centre: np.ndarray, x: float, ang: np.ndarray) -> np.ndarray:
+    """(len(ang) + 2,) metres from ``centre`` (x, z) along each angle (sin, cos: x, z) to the
+    edge of the convex hull of ``points`` (N, 2), then the least and the greatest z of the hull
+    on the line at ``x``; nan where the hull is degenerate or the centre outside it."""
+    from scipy.spatial import ConvexHull, QhullError
+    try:
+        eq = ConvexHull(points).equations  # n . x + d <= 0 inside
+    except (QhullError, ValueError):
+        return np.full(len(ang) + 2, np.nan)
+    inside = -(eq[:, :2] @ centre + eq[:, 2])  # each edge's distance past the centre (>= 0 inside)
+    if (inside < 0).any():
+        return np.full(len(ang) + 2, np.nan)
+    towards = np.stack([np.sin(ang), np.cos(ang)], 1) @ eq[:, :2].T  # (A, E)
+    reach = np.where(towards > 1e-9, inside / np.maximum(towards, 1e-9), np.inf).min(1)
+    bound = -(eq[:, 2] + eq[:, 0] * x) / np.where(np.abs(eq[:, 1]) > 1e-9, eq[:, 1], np.nan)
+    return np.concatenate([reach, [np.nanmax(np.where(eq[:, 1] < 0, bound, np.nan)),
+                                   np.nanmin(np.where(eq[:, 1] > 0, bound, np.nan))]])
+
+
+def _at_angles(values: np.ndarray, ang: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Each row of ``values`` (N, len(ang)), a periodic table over the angles ``ang`` (-pi..pi),
+    linearly interpolated at its point's angle ``a`` (N,)."""
+    x = (a - ang[0]) / (ang[1] - ang[0])
+    j = np.clip(np.floor(x).astype(int), 0, len(ang) - 2)
+    t = x - j
+    rows = np.arange(len(a))
+    return (1 - t) * values[rows, j] + t * values[rows, j + 1]
+
+
+def hang_across(body, r: BodyRegions, v: np.ndarray, f: np.ndarray, base: np.ndarray, slope: float) -> np.ndarray:
+    """A loose top under the crotch as cloth hangs there: across both legs, not round each
+    thigh. Cut from the thighs, its shell was two tubes whose inner sides, offset towards each
+    other, went through one another between the legs (seeds 200-229: 809 crossing faces) and
+    read as a pair of shorts under the hem, a notch at the front. Each half (by the body point
+    ``base`` it stood off) moves out from its thigh's centre, along its own direction, to the
+    convex hull of both legs' shell points at its height, coming in going down by at most
+    ``slope`` times the drop (``_hanging_hulls``, ``_across_table``), blended in from
+    ``ACROSS[0]`` over the crotch to the crotch (``_onto_hull``); a point going out towards the
+    middle between the legs stops on it: straight across the front and back, the thighs' inner
+    sides laid on the middle where the two halves meet (``_into_corners``). Each point's move
+    depends on its own position alone (seam copies move as one); the sleeves are left out."""
+    top = r.crotch_y + ACROSS[0]
+    rows = np.flatnonzero((v[:, 1] < top) & np.isin(r.group[body.surface().tree.query(base)[1]], ["torso", "upperleg"]))
+    if len(rows) < 3:
+        return v
+    middle, out = _legs_middle(body, r), v.copy()
+    wall, corners = np.zeros(len(v), bool), np.zeros((len(v), 2))
+    y = top - ACROSS[2] * np.arange(int(np.ceil((top - v[rows, 1].min()) / ACROSS[2])) + 1)  # going down
+    windows = [np.abs(v[rows, 1] - h) <= 2 * ACROSS[2] for h in y]
+    hulls = _hanging_hulls(v[rows], windows, slope * ACROSS[2])
+    for side in (1.0, -1.0):  # the body's own middle line goes with the first
+        mine = (base[rows, 0] >= middle) == (side > 0)
+        table = _across_table(y, windows, hulls, base[rows], mine, middle + side * ACROSS[3], r.crotch_y)
+        if table is None or not mine.any():
+            continue
+        i = rows[mine]
+        heights, centre, reach, ang = table
+        out[i[:, None], [0, 2]], wall[i], corners[i] = _onto_hull(v[i], heights, centre, reach, ang, top,
+                                                                   middle + side * ACROSS[3], side)
+    return _into_corners(out, f, wall, corners)
+
+
+def _into_corners(v: np.ndarray, f: np.ndarray, wall: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """``v`` with each ``wall`` point (on the middle between the legs) that has neighbours off
+    the middle moved all but ``ACROSS[5]`` of the way to the level (z) of the farthest of them
+    out towards its nearer corner (``corners``: least, greatest z): the edges between ran across
+    the corner, a notch a centimetre deep at the front and back under the crotch, a slit 3-4 cm
+    deep at the back over it. Not all the way: two such points on the corner's line with a third
+    made a triangle of no area, which the panels' flattening cannot solve. Seam copies move as one."""
+    rep = weld(v)
+    ff = rep[f]
+    edges = np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]])
+    a, b = edges[wall[edges[:, 0]] & ~wall[edges[:, 1]]].T
+    front = v[b, 2] > corners[a].mean(1)
+    level = np.full(len(v), np.nan)
+    np.fmax.at(level, a[front], v[b[front], 2])
+    back = np.full(len(v), np.nan)
+    np.fmin.at(back, a[~front], v[b[~front], 2])
+    level = np.where(np.isfinite(level), level, back)
+    out = v.copy()
+    moved = np.isfinite(level)
+    out[moved, 2] = level[moved] + ACROSS[5] * (v[moved, 2] - level[moved])
+    return out[rep]
+
+
+def _across_table(y: np.ndarray, windows: list, hulls: list, base: np.ndarray, mine: np.ndarray, line: float,
+                  crotch: float):
+    """``hang_across``'s measure of one half at the heights ``y``: (heights, the centre (x, z)
+    its points move out from at each, and ``_hull_reach`` of the height's hull round it at
+    ``ACROSS_ANGLES`` angles and on its middle ``line``, angles); None where fewer than two
+    heights can be measured. The centre is the mean of the half's (``mine``) ``base`` points in
+    the height's window under the crotch, where the legs part, and of both halves' over it
+    (``ACROSS_PART`` either side, eased): seen from the half's centre, a point by the middle at
+    the back went out sideways as much as back, and the points over the cleft crossed there."""
+    ang = np.linspace(-np.pi, np.pi, ACROSS_ANGLES + 1)
+    t = _ease((crotch + ACROSS_PART - y) / (2 * ACROSS_PART))
+    centre = np.array([(1 - tk) * base[w][:, [0, 2]].mean(0) + tk * base[w & mine][:, [0, 2]].mean(0)
+                       if (w & mine).sum() >= 3 else (np.nan, np.nan) for w, tk in zip(windows, t)])
+    reach = np.array([_hull_reach(h, c, line, ang) if np.isfinite(c[0]) and h is not None
+                      else np.full(len(ang) + 2, np.nan) for h, c in zip(hulls, centre)])
+    ok = np.isfinite(reach).all(1) & np.isfinite(centre).all(1)
+    return (y[ok], centre[ok], reach[ok], ang) if ok.sum() >= 2 else None
+
+
+def _hanging_hulls(v: np.ndarray, windows: list, fall: float) -> list:
+    """The corners (M, 2) of each window's hull round the (x, z) of the points ``v`` in it,
+    going down: never more than ``fall`` metres inside the one above (cloth hangs from the
+    belly, it does not follow it in); None where a window's hull cannot be made."""
+    from scipy.spatial import ConvexHull, QhullError
+    hulls, above = [], None
+    for w in windows:
+        pts = v[w][:, [0, 2]]
+        if above is not None:
+            mid = above.mean(0)
+            off = above - mid
+            pts = np.vstack([pts, mid + off * np.clip(1 - fall / np.maximum(np.linalg.norm(off, axis=1), 1e-9),
+                                                      0, None)[:, None]])
+        try:
+            above = pts[ConvexHull(pts).vertices]
+        except (QhullError, ValueError):
+            above = None
+        hulls.append(above)
+    return hulls
+
+
+def _onto_hull(p: np.ndarray, y: np.ndarray, centre: np.ndarray, reach: np.ndarray, ang: np.ndarray, top: float,
+               line: float, side: float):
+    """Points ``p`` of one half moved (``hang_across``) by its table: their (x, z), whether
+    each is on the middle ``line`` (a point going out towards it stops there: the inner side of
+    the thigh's tube is laid on it in order, not piled in its corners), and the least and
+    greatest z of the hull there."""
+    c = np.stack([np.interp(p[:, 1], y[::-1], centre[::-1, k]) for k in (0, 1)], 1)
+    rel = p[:, [0, 2]] - c
+    a = np.arctan2(rel[:, 0], rel[:, 1])
+    k = np.clip(np.searchsorted(-y, -p[:, 1]), 1, len(y) - 1)  # y[k - 1] >= p.y >= y[k]
+    t = np.clip((y[k - 1] - p[:, 1]) / (y[k - 1] - y[k]), 0.0, 1.0)
+    hull = (1 - t) * _at_angles(reach[k - 1, :-2], ang, a) + t * _at_angles(reach[k, :-2], ang, a)
+    corners = (1 - t)[:, None] * reach[k - 1, -2:] + t[:, None] * reach[k, -2:]
+    d = np.maximum(np.linalg.norm(rel, axis=1), 1e-9)
+    u = rel / d[:, None]
+    inward = -side * u[:, 0]  # how much of a step out goes towards the middle
+    to_line = np.where(inward > 1e-9, side * (c[:, 0] - line) / np.maximum(inward, 1e-9), np.inf)
+    q = c + u * np.minimum(d + _ease((top - p[:, 1]) / ACROSS[1]) * (hull - d), to_line)[:, None]
+    past = side * (q[:, 0] - line) <= 1e-9
+    q[past] = np.column_stack([np.full(past.sum(), line), _within(q[past, 1], corners[past, 0], corners[past, 1])])
+    return q, past, corners
+
+
+def _within(z: np.ndarray, lo: np.ndarray, hi: np.ndarray, soft: float = ACROSS[4]) -> np.ndarray:
+    """``z`` kept between ``lo`` and ``hi`` without two points made one: from ``soft`` metres
+    short of either end, the distance left shrinks exponentially (smooth, and still in order;
+    a hard clip set the points past a corner on one line, and a triangle of three of them had
+    no area, which the panels' flattening cannot solve)."""
+    eps = np.minimum(soft, 0.25 * (hi - lo))
+    up, down = z > hi - eps, z < lo + eps
+    z = np.where(up, hi - eps * np.exp(-(z - hi + eps) / eps), z)
+    return np.where(down, lo + eps * np.exp(-(lo + eps - z) / eps), z)
+
+
 def _legs_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float,
                 density: int = 1):
     """A bottom: the body region ``cut`` covers, offset from it, its legs hanging as tubes;
@@ -998,16 +1170,20 @@ def _region(kind: GarmentKind) -> Callable:
     return kind.region
 
 
-def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float):
+def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float,
+                 across: bool = True):
     """The body region ``cut`` covers, offset from the body; tops and dresses along
     ``r.outward`` (``offset_directions``: bottoms keep the skin's normals, whose legs' shells
     parted higher at the crotch along the averaged ones), bridged over the hollows of the small
-    of the back and the belly, and draped."""
+    of the back and the belly, and draped; a top's (``across``; not a dress's or a coat's
+    bodice, whose skirt is its own) hangs across both legs under the crotch (``hang_across``)."""
     kind = GARMENTS[g.kind]
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
-    v, f, uv, out, spare = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
-                                      r.outward if loose else r.normals, offset, r.room if loose else None, r.widest)
-    v = v[weld(v)]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
+    v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
+                                            r.outward if loose else r.normals, offset, r.room if loose else None,
+                                            r.widest)
+    rep = weld(v)
+    v, base = v[rep], base[rep]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:
         slope = float(np.clip(HANG[0] - HANG[1] * (offset - HANG[2]), HANG[3], HANG[0]))
         torso = _over_torso(body, r, v)
@@ -1015,6 +1191,8 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
         v = bridge(v, f, out, low_back, offset)
         v = drape(v, f, torso, slope, spare=ROOM[5] * spare)
         v = smooth_openings(v, f)
+        if across and r.across and kind.layer == Layer.TOP:  # a top's: a coat's skirt, a jumpsuit's legs are their own
+            v = hang_across(body, r, v, f, base, slope)
     return v, f, uv
 
 
@@ -1023,7 +1201,7 @@ def _dress_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     """A bodice (a shell) and a skirt flaring from the hips (``density``, ``parted``: see ``_flare``),
     the skirt's uv squeezed under the bodice's in the atlas (where the legs' would be), so the two
     share no texel and each can take its own pattern."""
-    v, f, uv = _shell_shape(body, r, split, g, cut, offset)
+    v, f, uv = _shell_shape(body, r, split, g, cut, offset, across=False)
     sv, sf, suv = _flare(body, r, g, offset, r.hip_y, density, parted)
     suv = suv * [1.0, max(uv[:, 1].min() - 0.02, 0.1)]
     return np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.concatenate([uv, suv])
@@ -1201,6 +1379,7 @@ class GarmentShape:
     hemmed: bool = True
     weights: Callable | None = None
     sole: bool = False  # the garment's thickness is a sole the body stands on, not cloth over it
+    across: bool = False  # a top's shell: under the crotch it hangs across both legs (``hang_across``)
     dense: bool = False  # ``build`` takes ``density=``: its hanging cloth is made finer to be simulated
 
 
@@ -1212,9 +1391,21 @@ class GarmentShape:
 # density its walk folded 3.5x the skinned coat's, 14.5x at two; bench/RESULTS.md).
 SIMULATED_DENSITY = 2
 
+def across_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """A top's skinning weights where it hangs across both legs (``hang_across``): both legs'
+    from over the crotch down (``both_legs_weights``), not the sleeves; else the bound ones.
+    Bound to its closest point, each half followed one thigh and a stride opened the two halves
+    where they meet in the middle."""
+    if not r.across:
+        return weights
+    near = r.group[body.surface().tree.query(v)[1]]
+    return both_legs_weights(body, r, v, weights, top=r.crotch_y + ACROSS[0], among=np.isin(near, ["torso", "upperleg"]),
+                             share=ACROSS_SIDE, legs=True)
+
+
 # A new garment shape is one entry here; GarmentKind.shape names one.
 GARMENT_SHAPES: dict[str, GarmentShape] = {
-    "shell": GarmentShape(_shell_shape),
+    "shell": GarmentShape(_shell_shape, weights=across_weights, across=True),
     "legs": GarmentShape(_legs_shape, dense=True),
     "flare": GarmentShape(lambda body, r, split, g, cut, offset, density=1: _flare(body, r, g, offset, r.waist_y, density),
                           weights=lambda *a: both_legs_weights(*a), dense=True),  # hangs across both legs: skinned to both
@@ -1222,8 +1413,8 @@ GARMENT_SHAPES: dict[str, GarmentShape] = {
     # a coat: a dress's shape, its skirt parted down the front
     "shell+parted": GarmentShape(functools.partial(_dress_shape, parted=True), weights=lambda *a: both_legs_weights(*a),
                                  dense=True),
-    "shell+collar": GarmentShape(_shell_and(_collar)),
-    "shell+hood": GarmentShape(_shell_and(_hood)),
+    "shell+collar": GarmentShape(_shell_and(_collar), weights=across_weights, across=True),
+    "shell+hood": GarmentShape(_shell_and(_hood), weights=across_weights, across=True),
     "hull": GarmentShape(lambda body, r, split, g, cut, offset: _shoes(body, r, g, offset), hemmed=False),
     "shoe": GarmentShape(_shoe_shape, hemmed=False, weights=_flexing_feet, sole=True),  # the toes bend at the ball
     "heeled": GarmentShape(_shoe_shape, hemmed=False, weights=_flexing_feet, sole=True),
@@ -1250,7 +1441,9 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
         v = _let_out_legs(body, r, v, room)
     n_faces, n_vertices = len(f), len(v)
     if GARMENT_SHAPES[kind.shape].hemmed:
-        v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds))
+        across = r.across and kind.layer == Layer.TOP and maker.across
+        v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds),
+                       legs=(_legs_centre(body, r), r.crotch_y + ACROSS[0]) if across else None)
     v = push_out(body, v)
     return GarmentMesh(g, v, f, uv, int(kind.layer), offset, (len(f) - n_faces, len(v) - n_vertices), fit)
 
@@ -1260,16 +1453,19 @@ def _cut_longer(g: GarmentParams, grade: int) -> GarmentParams:
     return dataclasses.replace(g, length=float(np.clip(g.length + GRADE_LENGTH * grade, 0, 1))) if grade else g
 
 
-def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray, top: float | None = None,
+                      among: np.ndarray | None = None, share: float = LEGS_SIDE, legs: bool = False) -> np.ndarray:
     """Skinning weights for a skirt (or a dress's skirt) that hangs from the hips over both legs.
     Closest-point binding gives each point one leg, so a stride tears the front and back apart
     along where the binding switches legs and drives the hem between the knees into one of them.
     Below the hips, a point takes the weights at its closest point on the body's left half and
     on its right half, mixed by how far to that side it is (half and half at the front and back
-    centre, one leg alone from ``LEGS_SIDE`` of the ring's radius out), blended in from the hip
-    line over ``LEGS_BLEND``."""
+    centre, one leg alone from ``share`` of the ring's radius out), blended in from the hip
+    line (or ``top``) over ``LEGS_BLEND``; only the points ``among`` (a mask) when given; with
+    ``legs``, each half's closest point on its leg alone."""
     from synmitsuba.body.binding import MeshIndex
-    down = np.clip((r.hip_y - v[:, 1]) / LEGS_BLEND, 0.0, 1.0)
+    down = np.clip((r.hip_y if top is None else top) - v[:, 1], 0.0, None) / LEGS_BLEND
+    down = np.minimum(down, 1.0) * (True if among is None else among)
     rows = np.flatnonzero(down > 0)
     if not len(rows):
         return weights
@@ -1278,13 +1474,15 @@ def both_legs_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) 
     side_w = []
     for side in (1.0, -1.0):  # each half: its vertices, and the faces with all three among them
         keep = side * (body.vertices[:, 0] - cx) >= 0.0
+        if legs:
+            keep &= np.isin(r.group, ["upperleg", "lowerleg"])
         faces = body.faces[keep[body.faces].all(1)]
         index = np.cumsum(keep) - 1
         half = MeshIndex(body.vertices[keep], index[faces])
         _, tri, bary = half.closest(p)
         side_w.append(np.einsum("nk,nkj->nj", bary, body.weights[faces[tri]]))
     radius = np.maximum(np.hypot(p[:, 0] - cx, p[:, 2] - cz), 1e-6)
-    s = np.clip(0.5 + 0.5 * (p[:, 0] - cx) / (LEGS_SIDE * radius), 0.0, 1.0)[:, None]
+    s = np.clip(0.5 + 0.5 * (p[:, 0] - cx) / (share * radius), 0.0, 1.0)[:, None]
     mixed = s * side_w[0] + (1 - s) * side_w[1]
     out = weights.astype(np.float64).copy()
     t = down[rows, None]
@@ -1475,11 +1673,16 @@ def _smooth_along(edge: np.ndarray, ends: np.ndarray, x: np.ndarray, rounds: int
     return y / np.maximum(np.linalg.norm(y, axis=1, keepdims=True), 1e-12)
 
 
-def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_normal: bool = False):
+def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_normal: bool = False,
+        legs: tuple[np.ndarray, float] | None = None):
     """A turned-in band along every opening (hem, cuff, neckline), ``depth`` (the cloth's
     thickness) deep towards the closest body point (``along_normal``: along the cloth's own
     normal, turned to the body, so a pleated or waved hem's band follows its folds instead of
     crossing itself), so an edge seen in a close-up has thickness.
+    ``legs`` (the (x, z) of the middle between them, a height): under that height, a hem
+    that hangs across both legs (``hang_across``) turns in level towards that middle, blended
+    in over ``ACROSS[1]`` (towards the closest body point, a band on the middle between the
+    legs turned to one leg or the other from point to point, by up to 68 degrees).
     Openings are found with vertices welded within a micrometre (UV seams split the mesh, and
     the cut places a seam's two copies of a vertex up to ~1e-7 m apart, but are not openings)."""
     rep = weld(v)
@@ -1495,6 +1698,12 @@ def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_
         towards = n * np.where(np.einsum("ij,ij->i", n, towards) < 0, -1.0, 1.0)[:, None]
     else:  # the closest point jumps between neighbours over a hollow: averaged along the edge, no teeth
         towards = _smooth_along(rep[edge], rep[ends], towards, HEM_SMOOTHING)
+    if legs is not None:
+        out = (v[ends] - [legs[0][0], 0.0, legs[0][1]]) * [1.0, 0.0, 1.0]
+        out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-9)
+        t = _ease((legs[1] - v[ends, 1]) / ACROSS[1])[:, None]
+        towards = towards + t * (out - towards)
+        towards /= np.maximum(np.linalg.norm(towards, axis=1, keepdims=True), 1e-9)
     inner = -np.ones(len(v), np.int64)
     inner[ends] = len(v) + np.arange(len(ends))
     a, b = edge.T
