@@ -1698,12 +1698,14 @@ def hem(body, v: np.ndarray, f: np.ndarray, uv: np.ndarray, depth: float, along_
         towards = n * np.where(np.einsum("ij,ij->i", n, towards) < 0, -1.0, 1.0)[:, None]
     else:  # the closest point jumps between neighbours over a hollow: averaged along the edge, no teeth
         towards = _smooth_along(rep[edge], rep[ends], towards, HEM_SMOOTHING)
-    if legs is not None:
-        out = (v[ends] - [legs[0][0], 0.0, legs[0][1]]) * [1.0, 0.0, 1.0]
+    middle, top = legs if legs is not None else (np.zeros(2), -np.inf)
+    low = np.flatnonzero(v[ends, 1] < top)
+    if len(low):  # (elsewhere the band is as without ``legs``)
+        out = (v[ends[low]] - [middle[0], 0.0, middle[1]]) * [1.0, 0.0, 1.0]
         out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-9)
-        t = _ease((legs[1] - v[ends, 1]) / ACROSS[1])[:, None]
-        towards = towards + t * (out - towards)
-        towards /= np.maximum(np.linalg.norm(towards, axis=1, keepdims=True), 1e-9)
+        t = _ease((top - v[ends[low], 1]) / ACROSS[1])[:, None]
+        blended = towards[low] + t * (out - towards[low])
+        towards[low] = blended / np.maximum(np.linalg.norm(blended, axis=1, keepdims=True), 1e-9)
     inner = -np.ones(len(v), np.int64)
     inner[ends] = len(v) + np.arange(len(ends))
     a, b = edge.T
