@@ -877,9 +877,9 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     elsewhere, the body points they stood off). Only the cut's largest piece is kept: where a
     region's field dips back over zero past its edge (a tank's arms, cut by its armholes, left
     a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
-    arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when given, scales the offset down
-    where it is tight (``fit_offset``, as the ``widest`` top's, or this one's if it is wider);
-    without it the offset is exact."""
+    arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when
+    given, scales the offset down where it is tight (``fit_offset``, as the ``widest`` top's,
+    or this one's if it is wider); without it the offset is exact."""
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
     f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv, limit[src, None])
