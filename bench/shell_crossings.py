@@ -7,8 +7,11 @@ axis, up to 0.3 m under them), under the crotch's height + 4 cm (a long top's fr
 meeting between the legs) and elsewhere (shirt collars' falls and hoods lie over their own shell
 by design). For a top (not a coat: its skirt is a flare) reaching 4 cm under the crotch, also how far behind its own front (back) it
 lies seen straight on at the middle between the legs under the crotch (``reference.middle_notch``:
-a shell of each thigh left a notch there; inf where another layer shows through). Prints JSON:
-per garment, totals by place, and the notches' median and largest.
+a shell of each thigh left a notch there; inf where another layer shows through). For each top or
+dress standing 3 cm or more off the body, the shelf under the bust (``reference.hang_shelf``: seen
+from the front down columns across the chest, from 8 cm under the shoulder joints to the waist,
+how far it lies behind a line falling in 1 cm for every 2 cm down from any point of it over it).
+Prints JSON: per garment, totals by place, the notches' and the shelves' median and largest.
 
     python bench/shell_crossings.py [--first 200] [--subjects 30]
 """
@@ -50,7 +53,7 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=200)
     ap.add_argument("--subjects", type=int, default=30)
     a = ap.parse_args()
-    rows, total, notches = [], {"armpits": 0, "crotch": 0, "elsewhere": 0}, []
+    rows, total, notches, shelves = [], {"armpits": 0, "crotch": 0, "elsewhere": 0}, [], []
     for seed in range(a.first, a.first + a.subjects):
         h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64}))
         for g in h.garments:
@@ -64,6 +67,9 @@ def main() -> None:
             if shell and GARMENTS[g.params.kind].layer == Layer.TOP and g.vertices[:, 1].min() < h.regions.crotch_y - 0.04:
                 row["middle_notch_mm"] = notch_mm(h, g)
                 notches.append(row["middle_notch_mm"])
+            if g.offset >= 0.03:
+                row["bust_shelf_mm"] = shelf_mm(h, g)
+                shelves.append(row["bust_shelf_mm"])
             for k in total:
                 total[k] += row[k]
             rows.append(row)
@@ -71,11 +77,24 @@ def main() -> None:
                       "middle_notch_mm": {"tops": len(notches), "another_layer_first": notches.count(None),
                                           "median": _median([n for n in notches if n is not None]),
                                           "largest": max((n for n in notches if n is not None), default=None)},
+                      "bust_shelf_mm": {"garments": len(shelves), "median": _median(shelves),
+                                        "largest": max(shelves, default=None)},
                       "rows": rows}, indent=1))
 
 
 def _median(x: list) -> float | None:
     return float(np.median(x)) if x else None
+
+
+def shelf_mm(h, g) -> float:
+    """``reference.hang_shelf`` of garment ``g`` (its band left out) on subject ``h`` at rest, in
+    millimetres: columns 0.6 of the shoulder joints' reach either side of the neck's axis, from
+    8 cm under the shoulder joints to the waist, a fall of 1 in 2."""
+    from reference import hang_shelf
+    r = h.regions
+    xs = r.neck_xz[0] + np.arange(-0.6, 0.61, 0.1) * r.shoulder[0]
+    return round(1000 * hang_shelf(g.vertices, g.faces[:len(g.faces) - g.hem[0]], xs, r.shoulder[1] - 0.08,
+                                   r.waist_y, slope=0.5), 1)
 
 
 def notch_mm(h, g) -> float | None:

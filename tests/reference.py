@@ -88,6 +88,29 @@ def first_hits(origins: np.ndarray, direction: np.ndarray, tri: np.ndarray) -> n
     return np.where(hit, t, np.inf).min(1)
 
 
+def hang_shelf(vertices: np.ndarray, faces: np.ndarray, xs: np.ndarray, top: float, bottom: float,
+               slope: float = 1.0, step: float = 0.005) -> float:
+    """Metres a mesh seen straight on from the front (+z), down each column x in ``xs`` from
+    ``top`` to ``bottom`` every ``step``, lies behind the line falling in at ``slope`` (metres in
+    per metre down) from any point of the same column over it, at most: a shelf under a bust
+    that cloth would hang straight down from. Only faces turned to the front are met
+    (``first_hits``): a ray through an opening counts as no point."""
+    tri = vertices[faces]
+    tri = tri[np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])[:, 2] > 0]
+    ys = np.arange(top, bottom, -step)
+    worst = 0.0
+    for x in xs:
+        o = np.stack([np.full_like(ys, x), ys, np.full_like(ys, 2.0)], 1)
+        z = 2.0 - first_hits(o, np.array([0.0, 0.0, -1.0]), tri)
+        hang = -np.inf
+        for y, zi in zip(ys, z):
+            hang -= slope * step
+            if np.isfinite(zi):
+                worst = max(worst, hang - zi)
+                hang = max(hang, zi)
+    return worst
+
+
 def middle_notch(layers: list, top: int, middle: float, crotch: float) -> float:
     """Metres the top (``layers[top]``; layers are (vertices, faces), the body first), seen
     straight on from the front and from behind at the middle between the legs (x = ``middle``

@@ -415,7 +415,8 @@ class BodyRegions:
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
     room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
     widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
-    across: bool = False  # tops hang across both legs under the crotch (``hang_across``), not round each thigh
+    hang: bool = False  # skinned tops hang as cloth: straight down from the bust and shoulder blades
+    # (``hang_columns``, not ``drape``) and across both legs under the crotch (``hang_across``)
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -536,7 +537,7 @@ def dress_regions(body, r: BodyRegions, garments, room: bool = True) -> BodyRegi
         return dataclasses.replace(r, widest=widest)
     v = body.vertices
     probed = np.isin(r.group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > r.waist_y)
-    return dataclasses.replace(r, widest=widest, across=True, room=free_room(body, r.outward, probed,
+    return dataclasses.replace(r, widest=widest, hang=True, room=free_room(body, r.outward, probed,
                                                                 np.isin(r.group, ["upperarm", "lowerarm", "hand"])))
 
 
@@ -1189,9 +1190,9 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
         torso = _over_torso(body, r, v)
         low_back = torso & (v[:, 1] > r.crotch_y) & (v[:, 1] < r.waist_y + 2 * OFFSET_BLEND)
         v = bridge(v, f, out, low_back, offset)
-        v = drape(v, f, torso, slope, spare=ROOM[5] * spare)
+        v = (hang_columns if r.hang else drape)(v, f, torso, slope, spare=ROOM[5] * spare)
         v = smooth_openings(v, f)
-        if across and r.across and kind.layer == Layer.TOP:  # a top's: a coat's skirt, a jumpsuit's legs are their own
+        if across and r.hang and kind.layer == Layer.TOP:  # a top's: a coat's skirt, a jumpsuit's legs are their own
             v = hang_across(body, r, v, f, base, slope)
     return v, f, uv
 
@@ -1396,7 +1397,7 @@ def across_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> 
     from over the crotch down (``both_legs_weights``), not the sleeves; else the bound ones.
     Bound to its closest point, each half followed one thigh and a stride opened the two halves
     where they meet in the middle."""
-    if not r.across:
+    if not r.hang:
         return weights
     near = r.group[body.surface().tree.query(v)[1]]
     return both_legs_weights(body, r, v, weights, top=r.crotch_y + ACROSS[0], among=np.isin(near, ["torso", "upperleg"]),
@@ -1441,7 +1442,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
         v = _let_out_legs(body, r, v, room)
     n_faces, n_vertices = len(f), len(v)
     if GARMENT_SHAPES[kind.shape].hemmed:
-        across = r.across and kind.layer == Layer.TOP and maker.across
+        across = r.hang and kind.layer == Layer.TOP and maker.across
         v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds),
                        legs=(_legs_centre(body, r), r.crotch_y + ACROSS[0]) if across else None)
     v = push_out(body, v)
@@ -1615,6 +1616,93 @@ def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, round
     for _ in range(soften):  # where the fall leaves the chest, a rounded fold, not a ledge
         out = mean @ out
     return (p + out[:, None] * n)[rep]
+
+
+# a skinned top hanging straight down (``hang_columns``): metres either side of a point the cloth over it
+# is looked for; rounds of averaging the shell's normals over neighbours for the direction it moves out in;
+# metres over which the moves are averaged (slivers of the cut, a millimetre across, turned over); metres
+# round a point the points over it are looked for, again from where they moved at most so many times; and
+# metres either side of the torso's middle over which points move out less sideways (none on it)
+HANG_COLUMN = (0.02, 10, 0.004, 0.1, 6, 0.06)
+
+
+def hang_columns(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float,
+                 spare: np.ndarray | None = None) -> np.ndarray:
+    """``drape`` measured down columns instead of along edges (a skinned top's): a ``hanging``
+    point comes in towards the body by at most ``slope`` times its drop under any hanging point
+    over it within ``HANG_COLUMN[0]`` to either side, along its horizontal outward normal
+    (averaged over neighbours: a crease's own turn in). Down edges, a coarse shell kept a shelf
+    under the bust, 2-4 cm deep: its edges there run sideways off the bust, and each was within
+    the slope. ``spare`` caps how far a point moves sideways (x, towards an arm: it still moves
+    forward or back in full). Seam copies of a point move as one."""
+    rep = weld(v)
+    ff = rep[f]
+    p = v[rep]
+    if not hanging.any():
+        return p[rep]
+    mean = neighbour_mean(ff, len(p))
+    n = vertex_normals(p, ff)
+    for _ in range(HANG_COLUMN[1]):
+        n = mean @ n
+    n[:, 0] *= np.clip(np.abs(p[:, 0] - _middle(p, hanging)) / HANG_COLUMN[5], 0.0, 1.0)  # straight out of the spine's groove
+    n[:, 1] = 0.0
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
+    own = np.flatnonzero(rep == np.arange(len(p)))  # one of each seam's copies
+    lift = np.where(hanging[own], _column_lift(p[own], n[own], slope, hanging[own]), 0.0)
+    move = lift[:, None] * n[own]
+    if spare is not None:
+        move[:, 0] = np.clip(move[:, 0], -spare[own], spare[own])
+    out = p.copy()
+    out[own] += _within_reach(p[own], HANG_COLUMN[2]) @ move
+    return out[rep]
+
+
+def _column_lift(q: np.ndarray, n: np.ndarray, slope: float, over: np.ndarray) -> np.ndarray:
+    """How far each of the points ``q`` must move out along ``n`` (unit, horizontal) to be at
+    most ``slope`` times its drop in from each ``over`` point higher than it within
+    ``HANG_COLUMN[0]`` across ``n`` (on the same side: normals within 60 degrees), looked for
+    within ``HANG_COLUMN[3]`` and again from where the points moved, ``HANG_COLUMN[4]`` times
+    at most: a hang carries on down from the points it moved."""
+    from scipy.spatial import cKDTree
+    i, j = cKDTree(q).query_pairs(HANG_COLUMN[3], output_type="ndarray").T
+    b, a = np.r_[i, j], np.r_[j, i]
+    keep = over[a] & (q[a, 1] > q[b, 1]) & (np.einsum("ij,ij->i", n[a], n[b]) > 0.5)
+    order = np.argsort(b[keep], kind="stable")
+    b, a = b[keep][order], a[keep][order]
+    lift = np.zeros(len(q))
+    if not len(b):
+        return lift
+    first = np.flatnonzero(np.r_[True, b[1:] != b[:-1]])
+    for _ in range(HANG_COLUMN[4]):
+        p = q + lift[:, None] * n
+        d = p[a] - p[b]
+        along = np.einsum("ij,ij->i", d, n[b])
+        across = d[:, 0] ** 2 + d[:, 2] ** 2 - along ** 2
+        need = np.maximum.reduceat(np.where(across < HANG_COLUMN[0] ** 2, along - slope * d[:, 1], 0.0), first)
+        if need.max() <= 1e-5:
+            break
+        lift[b[first]] += np.clip(need, 0.0, None)
+    return lift
+
+
+def _middle(p: np.ndarray, hanging: np.ndarray) -> np.ndarray:
+    """(N,) the torso's middle x at the height of each of the points ``p``: the mean x of the
+    ``hanging`` points within 2 cm of it in height."""
+    h = p[hanging]
+    ys = np.arange(h[:, 1].min(), h[:, 1].max() + 0.02, 0.01)
+    near = np.abs(h[None, :, 1] - ys[:, None]) <= 0.02
+    some = near.any(1)  # a height with none (a gap in the torso's points) is interpolated over
+    return np.interp(p[:, 1], ys[some], (near[some] @ h[:, 0]) / near[some].sum(1))
+
+
+def _within_reach(p: np.ndarray, reach: float):
+    """Row-normalised (sparse) mean over the points of ``p`` within ``reach`` of each, itself included."""
+    from scipy import sparse
+    from scipy.spatial import cKDTree
+    i, j = cKDTree(p).query_pairs(reach, output_type="ndarray").T
+    n = len(p)
+    a = sparse.csr_matrix((np.ones(2 * len(i) + n), (np.r_[i, j, np.arange(n)], np.r_[j, i, np.arange(n)])), shape=(n, n))
+    return sparse.diags(1.0 / np.asarray(a.sum(1)).ravel()) @ a
 
 
 BRIDGE = (150, 0.5)  # rounds a loose shell fills hollows, and at most how much of its offset it moves out
