@@ -59,11 +59,16 @@ def _normals(vertices: np.ndarray, faces: np.ndarray, vf) -> np.ndarray:
 
 def neighbour_mean(faces: np.ndarray, n: int):
     """Row-normalised vertex adjacency (sparse) of a mesh, self included."""
+    return pair_mean(faces[:, [0, 1, 2]].ravel(), faces[:, [1, 2, 0]].ravel(), n)
+
+
+def pair_mean(i: np.ndarray, j: np.ndarray, n: int):
+    """Row-normalised (sparse) mean over each of ``n`` points and the points it is paired with
+    (pairs ``i[k]``, ``j[k]`` either way; a pair given twice counts once)."""
     from scipy import sparse
-    i = np.concatenate([faces[:, [0, 1, 2, 1, 2, 0]].ravel(), np.arange(n)])
-    j = np.concatenate([faces[:, [1, 2, 0, 0, 1, 2]].ravel(), np.arange(n)])
-    A = sparse.csr_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
-    A.data[:] = 1.0  # duplicate edges count once
+    a, b = np.concatenate([i, j, np.arange(n)]), np.concatenate([j, i, np.arange(n)])
+    A = sparse.csr_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    A.data[:] = 1.0
     return sparse.diags(1.0 / np.asarray(A.sum(1)).ravel()) @ A
 
 

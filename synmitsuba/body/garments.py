@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from synmitsuba.body.collide import neighbour_mean
+from synmitsuba.body.collide import neighbour_mean, pair_mean
 from synmitsuba.body.sizing import GRADE_LENGTH, Fit, Girths, garment_fit, measure_girths, sample_grade
 from synmitsuba.body.shoes import (ALLOWANCE, SHOE_STYLES, HeelPitch, foot_points, heel_height, heel_mesh, heel_pitch,
                                    lace_mesh, sample_shoe_texture, shaft_mesh, shoe_material, shoe_mesh)
@@ -1697,12 +1697,9 @@ def _middle(p: np.ndarray, hanging: np.ndarray) -> np.ndarray:
 
 def _within_reach(p: np.ndarray, reach: float):
     """Row-normalised (sparse) mean over the points of ``p`` within ``reach`` of each, itself included."""
-    from scipy import sparse
     from scipy.spatial import cKDTree
     i, j = cKDTree(p).query_pairs(reach, output_type="ndarray").T
-    n = len(p)
-    a = sparse.csr_matrix((np.ones(2 * len(i) + n), (np.r_[i, j, np.arange(n)], np.r_[j, i, np.arange(n)])), shape=(n, n))
-    return sparse.diags(1.0 / np.asarray(a.sum(1)).ravel()) @ a
+    return pair_mean(i, j, len(p))
 
 
 BRIDGE = (150, 0.5)  # rounds a loose shell fills hollows, and at most how much of its offset it moves out
