@@ -1541,25 +1541,27 @@ def _tube(radius, rings: int = 41, segments: int = 32):
     return v.reshape(-1, 3), np.concatenate([np.stack([p, q, p + segments], 1), np.stack([q, q + segments, p + segments], 1)])
 
 
-def test_drape_hangs_cloth_from_what_is_above_at_its_slope():
-    """``garments.drape`` on tubes with a 2 cm bulge and a 2 cm groove: every ring's radius is
-    what cloth hanging at the slope from the rings above would have, max(r(y), max over y' > y
-    of r(y') - slope (y' - y)), written out here; no vertex moves in; softened (averaged), the
-    lift keeps at least 40 % of its height and never exceeds it."""
-    from synmitsuba.body.garments import drape
+def test_hang_columns_hangs_cloth_from_what_is_above_at_its_slope():
+    """``garments.hang_columns`` on tubes with a 2 cm bulge and a 2 cm groove (columns 2.9 cm
+    apart round them: each hangs from its own alone): every column that moves straight out
+    (front and back, and 6 cm or more to the side) has the radius cloth hanging at the slope
+    from the points above it would have, max(r(y), max over y' > y of r(y') - slope (y' - y)),
+    written out here; no point moves in, up or down, and elsewhere none moves out past it."""
+    from synmitsuba.body.garments import hang_columns
     slope = 0.1
     for sign in (1, -1):
         v, f = _tube(lambda y: 0.15 + sign * 0.02 * np.exp(-((y - 0.5) / 0.05) ** 2))
-        out = drape(v, f, np.ones(len(v), bool), slope, soften=0)
+        out = hang_columns(v, f, np.ones(len(v), bool), slope)
         r0, r1, y = np.hypot(v[:, 0], v[:, 2]), np.hypot(out[:, 0], out[:, 2]), v[:, 1]
         assert np.allclose(out[:, 1], y)
         ys, ring = np.unique(y, return_inverse=True)
         r = np.array([r0[ring == k].mean() for k in range(len(ys))])
         hang = np.array([max(r[k], (r[k:] - slope * (ys[k:] - ys[k])).max()) for k in range(len(ys))])
-        np.testing.assert_allclose(r1, hang[ring], atol=1e-5)  # to 10 um: drape stops under that
+        radial = (np.abs(v[:, 0]) < 1e-9) | (np.abs(v[:, 0]) >= 0.06)
+        assert radial.sum() > len(v) / 3
+        np.testing.assert_allclose(r1[radial], hang[ring][radial], atol=1e-5)  # to 10 um: it stops under that
         assert (hang - r).max() > 0.004  # it did hang somewhere
-        soft = np.hypot(*drape(v, f, np.ones(len(v), bool), slope)[:, [0, 2]].T) - r0
-        assert soft.min() >= -1e-12 and 0.4 * (r1 - r0).max() < soft.max() <= (r1 - r0).max() + 1e-12
+        assert (r1 >= r0 - 1e-12).all() and (r1 <= hang[ring] + 1e-5).all()
 
 
 def test_a_top_over_a_skirt_is_tucked_at_the_waist(human):

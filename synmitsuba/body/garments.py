@@ -37,13 +37,12 @@ LEG_ROOM_RAMP = 0.15  # metres under the crotch over which a bottom cut large le
 # through each other); and the percentile of each height's points the tube clears (the thigh's
 # fullest side, not a stray point)
 LEG_TUBE = (0.08, 0.01, 0.004, 80.0)
-# a top's slope going down (``drape``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
+# a top's slope going down (``hang_columns``): HANG[0] at an offset of HANG[2] metres, HANG[1] less per metre
 # further out, never under HANG[3]; offsets nest (a jacket sits outside the shirt), so slopes do too
 # and no inner garment hangs out through the one over it
 HANG = (0.85, 19.0, 0.014, 0.12)
 ARMPIT = 0.05  # metres under the shoulder joints the chest is measured up to
 TUCK = 0.03  # metres under the waist a top worn with a skirt ends
-SOFTEN = 6  # rounds of averaging the hang's lift over neighbours (a hard hang leaves a ledge)
 OFFSET_SMOOTHING = 16  # rounds of averaging the body's normals over neighbours before tops stand off along them
 OFFSET_BLEND = 0.04    # metres over which the averaged normals take over from the skin's (over the crotch, the waist)
 # where a shell stood FOLD[0] metres off along the skin's normals would turn over (under the chest,
@@ -53,7 +52,7 @@ FOLD = (0.05, 8, 3.0, 0.04)
 # a top's room beside the armpits (``free_room``): probed at ROOM[0] x ROOM[1]**k metres out (k < ROOM[2],
 # to ~10 cm); a shell takes up to ROOM[3] of the distance to the first probe in another part's reach,
 # a room that grows at most ROOM[4] metres per metre over the skin away from its tightest point; it
-# hangs out (``drape``) into at most ROOM[5] of the room it leaves (less for the top under: they nest)
+# hangs out (``hang_columns``) sideways into at most ROOM[5] of the room it leaves (less for the top under: they nest)
 ROOM = (0.016, 1.2, 11, 0.75, 0.5, 0.5)
 ROOM_NONE = 1.0  # metres: the room where there is no limit (finite: it is interpolated)
 ROOM_FREE = 0.15  # metres of room over which no top is scaled (1.5 x the loosest's offset, ~10 cm)
@@ -415,8 +414,7 @@ class BodyRegions:
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
     room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
     widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
-    hang: bool = False  # skinned tops hang as cloth: straight down from the bust and shoulder blades
-    # (``hang_columns``, not ``drape``) and across both legs under the crotch (``hang_across``)
+    hang: bool = False  # skinned tops hang across both legs under the crotch (``hang_across``)
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -473,7 +471,7 @@ def free_room(body, directions: np.ndarray, where: np.ndarray, part: np.ndarray)
     (``spread_room``); inf where no probe is. A jacket's shells (67 mm off) met there in the rest
     pose and went through each other: faces turned to the body by the hundred, a black notch
     in the armpit with an arm raised. Hollows within one part (under the bust) are left to
-    ``fold_prone`` and ``drape``: spread from there, a room held a jacket in over the whole chest."""
+    ``fold_prone`` and ``hang_columns``: spread from there, a room held a jacket in over the whole chest."""
     from pykdtree.kdtree import KDTree
     v, index = body.vertices, body.surface()
     others = {k: KDTree(np.ascontiguousarray(v[part != k], dtype=np.float64)) for k in np.unique(part)}
@@ -1190,7 +1188,7 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
         torso = _over_torso(body, r, v)
         low_back = torso & (v[:, 1] > r.crotch_y) & (v[:, 1] < r.waist_y + 2 * OFFSET_BLEND)
         v = bridge(v, f, out, low_back, offset)
-        v = (hang_columns if r.hang else drape)(v, f, torso, slope, spare=ROOM[5] * spare)
+        v = hang_columns(v, f, torso, slope, spare=ROOM[5] * spare)
         v = smooth_openings(v, f)
         if across and r.hang and kind.layer == Layer.TOP:  # a top's: a coat's skirt, a jumpsuit's legs are their own
             v = hang_across(body, r, v, f, base, slope)
@@ -1577,48 +1575,7 @@ def _along_openings(edges: np.ndarray, n_v: int) -> tuple[np.ndarray, np.ndarray
     return nxt, prv, simple & simple[nxt] & simple[prv]
 
 
-def drape(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float, rounds: int = 40,
-          soften: int = SOFTEN, spare: np.ndarray | None = None) -> np.ndarray:
-    """Cloth that hangs: going down an edge, a ``hanging`` vertex may come in towards the body
-    by at most ``slope`` times the drop (measured along its horizontal outward normal), so a
-    loose top falls from the chest and the shoulder blades over the underbust, the navel and
-    the small of the back instead of following them like paint (a shell offset along the
-    normals keeps every hollow of the skin). ``rounds`` edges is how far a hang reaches; then
-    ``soften`` rounds of averaging the lift over neighbours round the ledge it leaves. Seam
-    copies of a vertex (the render topology splits at UV seams) move as one: no crack opens.
-    ``spare`` (N,), when given, caps how far each vertex moves out (``free_room``'s room left
-    over its offset, beside the armpits): hung from the shoulder, the cloth in front of and
-    behind the armpit went out into the sleeve's. Capped wherever a room was measured (within
-    10-15 cm of an armpit), a t-shirt hung less from the shoulder blades, and its simulated
-    cloth turned down in a shelf under its held yoke."""
-    rep = weld(v)
-    ff = rep[f]
-    edges = unique_rows(np.concatenate([ff[:, [0, 1]], ff[:, [1, 2]], ff[:, [2, 0]]]))
-    p = v[rep].copy()
-    up = np.where((p[edges[:, 0], 1] > p[edges[:, 1], 1])[:, None], edges, edges[:, ::-1])  # (upper, lower)
-    up = up[hanging[rep][up].all(1)]  # hanging from hanging cloth: a sleeve is no torso's rail
-    n = vertex_normals(p, ff)
-    n[:, 1] = 0.0
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
-    a, b = up.T
-    out = np.zeros(len(p))  # how far each vertex moves out along n
-    cap = np.inf if spare is None else spare[rep]
-    for _ in range(rounds):
-        q = p + out[:, None] * n
-        need = np.einsum("ij,ij->i", q[a] - q[b], n[b]) - slope * (q[a, 1] - q[b, 1])
-        lift = np.zeros(len(p))
-        np.maximum.at(lift, b, need)
-        lift = np.minimum(np.clip(lift, 0.0, None), cap - out)
-        if lift.max() <= 1e-5:
-            break
-        out += lift
-    mean = neighbour_mean(ff, len(p))
-    for _ in range(soften):  # where the fall leaves the chest, a rounded fold, not a ledge
-        out = mean @ out
-    return (p + out[:, None] * n)[rep]
-
-
-# a skinned top hanging straight down (``hang_columns``): metres either side of a point the cloth over it
+# a top hanging straight down (``hang_columns``): metres either side of a point the cloth over it
 # is looked for; rounds of averaging the shell's normals over neighbours for the direction it moves out in;
 # metres over which the moves are averaged (slivers of the cut, a millimetre across, turned over); metres
 # round a point the points over it are looked for, again from where they moved at most so many times; and
@@ -1628,13 +1585,15 @@ HANG_COLUMN = (0.02, 10, 0.004, 0.1, 6, 0.06)
 
 def hang_columns(v: np.ndarray, f: np.ndarray, hanging: np.ndarray, slope: float,
                  spare: np.ndarray | None = None) -> np.ndarray:
-    """``drape`` measured down columns instead of along edges (a skinned top's): a ``hanging``
+    """Cloth that hangs (a top's or a bodice's, skinned or a simulation's rest shape): a ``hanging``
     point comes in towards the body by at most ``slope`` times its drop under any hanging point
     over it within ``HANG_COLUMN[0]`` to either side, along its horizontal outward normal
-    (averaged over neighbours: a crease's own turn in). Down edges, a coarse shell kept a shelf
-    under the bust, 2-4 cm deep: its edges there run sideways off the bust, and each was within
-    the slope. ``spare`` caps how far a point moves sideways (x, towards an arm: it still moves
-    forward or back in full). Seam copies of a point move as one."""
+    (averaged over neighbours: a crease's own turn in), so a loose top falls from the bust and
+    the shoulder blades over the underbust, the navel and the small of the back instead of
+    following them like paint. Measured down the shell's edges instead, a shelf 2-4 cm deep was
+    left under the bust (its edges there run sideways off it, each within the slope), and a
+    simulated top kept it as its rest shape. ``spare`` caps how far a point moves sideways (x,
+    towards an arm: it still moves forward or back in full). Seam copies of a point move as one."""
     rep = weld(v)
     ff = rep[f]
     p = v[rep]
