@@ -56,11 +56,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 # 82edb19 stood tops' and dresses' bodices off along averaged normals over the small of the back (a tucked top is
 # what a skirt hangs over): all four count from it, and the clips before it run again (bench/RESULTS.md, session 103).
 # 800371c did so wherever a shell 5 cm off would turn over (under the chest, by the armpits): all four count from it.
-SAME_CLOTH_SINCE = {"skirt": "800371c", "dress": "800371c", "shift": "800371c", "wrap": "800371c"}
+# 6e3b41b hung bodices straight down from the bust (``hang_columns``), not down their edges, and the tops tucked
+# into a simulated skirt (skinned, what it hangs over) so too: all four count from it.
+SAME_CLOTH_SINCE = {"skirt": "6e3b41b", "dress": "6e3b41b", "shift": "6e3b41b", "wrap": "6e3b41b"}
 # Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated as today from
 # 6271691, jackets and blazers over trousers or shorts from f177db3 (54b59dd made them clips of the set, so
 # clips drawn before it may be other clips), and over simulated trousers and shorts, which the set counts too, from
-# 06101e1: a set of their own (``--set tops``), logged apart, counted from TOPS_SINCE: 800371c, tops stood off along
+# 06101e1: a set of their own (``--set tops``), logged apart, counted from TOPS_SINCE (below); 800371c, tops stood off along
 # averaged normals wherever a shell 5 cm off would turn over (after 82edb19, over the small of the back and held taut
 # over its hollows; 9c930d6, a tank's stray patches
 # under the arms gone; 761af63, tops' edges smoothed along their curve and hems turned in evenly; 427d272, tops', jackets' and
@@ -69,8 +71,8 @@ SAME_CLOTH_SINCE = {"skirt": "800371c", "dress": "800371c", "shift": "800371c", 
 # after them; 2ac51ce: coats simulated, and the trousers under
 # them no longer held down to a coat's hem; a4ebae0: simulated trousers', shorts' and jumpsuits' legs twice as
 # fine each way; e69f74c: trousers, chinos, shorts and jumpsuits as twill; 5b3c83f: their legs as tubes,
-# jumpsuits in the set).
-TOPS_SINCE = "800371c"
+# jumpsuits in the set); 6e3b41b: tops' rest shapes hung straight down from the bust, down columns, not edges.
+TOPS_SINCE = "6e3b41b"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
