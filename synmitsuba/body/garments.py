@@ -414,7 +414,7 @@ class BodyRegions:
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
     room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
     widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
-    hang: bool = False  # skinned tops hang across both legs under the crotch (``hang_across``)
+    hang: bool = False  # skinned tops: scaled to ``room`` and hung across both legs under the crotch (``hang_across``)
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -525,18 +525,19 @@ def fit_offset(offset: float, room: np.ndarray, widest: float) -> np.ndarray:
     return offset * fit
 
 
-def dress_regions(body, r: BodyRegions, garments, room: bool = True) -> BodyRegions:
+def dress_regions(body, r: BodyRegions, garments, skinned: bool = True) -> BodyRegions:
     """``r`` for an outfit of ``garments``: its loosest top's offset (``outfit_widest``) and,
-    with ``room`` and a top worn, the room beside the armpits (``free_room``, over the torso and
-    arms above the waist) that tops scale to, and tops hanging across both legs under the crotch
+    with a top worn, the room beside the armpits (``free_room``, over the torso and arms above
+    the waist) that a top's hang moves sideways into at most (``hang_columns``); ``skinned``,
+    tops scale their offsets to it too, and hang across both legs under the crotch
     (``hang_across``). ``body`` is the body ``r`` was measured on."""
     widest = outfit_widest(r, garments)
-    if not (room and widest):
+    if not widest:
         return dataclasses.replace(r, widest=widest)
     v = body.vertices
     probed = np.isin(r.group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > r.waist_y)
-    return dataclasses.replace(r, widest=widest, hang=True, room=free_room(body, r.outward, probed,
-                                                                np.isin(r.group, ["upperarm", "lowerarm", "hand"])))
+    return dataclasses.replace(r, widest=widest, hang=skinned, room=free_room(body, r.outward, probed,
+                                                                   np.isin(r.group, ["upperarm", "lowerarm", "hand"])))
 
 
 def outfit_widest(r: BodyRegions, garments) -> float:
@@ -869,7 +870,7 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
 
 
 def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float, room: np.ndarray | None = None,
-               widest: float = 0.0):
+               widest: float = 0.0, scale: bool = True):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
     along, the room each has left over its offset where that scales it, ``ROOM_NONE``
@@ -877,8 +878,9 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     region's field dips back over zero past its edge (a tank's arms, cut by its armholes, left
     a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
     arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when
-    given, scales the offset down where it is tight (``fit_offset``, as the ``widest`` top's,
-    or this one's if it is wider); without it the offset is exact."""
+    given and with ``scale``, scales the offset down where it is tight (``fit_offset``, as the
+    ``widest`` top's, or this one's if it is wider); otherwise the offset is exact (and the room
+    left over it none where it is tighter)."""
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
     f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv, limit[src, None])
@@ -886,9 +888,9 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     p, n, uv, limit = p[used], n[used], uv[used], limit[used, 0]
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
     widest = max(widest, offset)
-    off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
-    scaled = limit < 1.5 * widest  # where fit_offset scales it
-    return p + n * off[:, None], f, uv, n, np.where(scaled, limit - off, ROOM_NONE), p
+    off = fit_offset(offset, limit, widest) if room is not None and scale else np.full(len(p), offset)
+    tight = limit < 1.5 * widest  # where fit_offset scales it
+    return p + n * off[:, None], f, uv, n, np.where(tight, np.maximum(limit - off, 0.0), ROOM_NONE), p
 
 
 @dataclass
@@ -1180,7 +1182,7 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
     v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
                                             r.outward if loose else r.normals, offset, r.room if loose else None,
-                                            r.widest)
+                                            r.widest, scale=r.hang)
     rep = weld(v)
     v, base = v[rep], base[rep]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:

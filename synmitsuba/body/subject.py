@@ -113,9 +113,10 @@ class LayeredHuman:
         # on the lifted body: hems at heights over its soles. Tops over each other scale alike where the arm is
         # near (``free_room``), by the loosest's offset, and a long top hangs across both legs (``hang_across``);
         # not the cloth stage's rest shapes yet: scaled, a simulated t-shirt's back turned down under its held
-        # yoke (2-4 faces a frame from frame 3 of tests/test_cloth_tops.py's walk, none before)
+        # yoke (2-4 faces a frame from frame 3 of tests/test_cloth_tops.py's walk, none before). They hang no
+        # further sideways than the room: unbounded, the bust's side went out into the sleeve (``hang_columns``)
         self.regions: BodyRegions = dress_regions(body, body_regions(body), recipe.garments,
-                                                  room=recipe.cloth != "simulated")
+                                                  skinned=recipe.cloth != "simulated")
         # the face shape after the regions (clothes are cut for the body's phenotypes; the neck's measuring
         # ring reaches under the jaw), and above the neck alone
         unshaped = body.vertices
