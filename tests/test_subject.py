@@ -367,7 +367,7 @@ def test_a_loose_top_hangs_straight_down_from_the_bust():
     that rendered as a dark crescent under each breast (seed 219's jacket, 70 mm off). Seen
     from the front, down columns across the chest, how far each top lies behind a line falling
     in 1 cm for every 2 cm down from any point over it (``reference.hang_shelf``): 13.0, 18.6,
-    11.8, 5.4, 12.7 and 13.7 mm hung down edges (``drape``); now under a millimetre
+    11.8, 5.4, 12.7 and 13.7 mm hung down edges (``drape``, since removed); now under a millimetre
     (``hang_columns``, skinned tops). A sagging bust's underside and the crease under it, laid
     on that fall, fold flat there: faces crossing others within 0.3 m under the shoulder joints
     (``_crossing_beside_the_armpits``) 0, 0, 0, 0, 0 and 18 hung down edges; now 16, 12, 0, 0,
