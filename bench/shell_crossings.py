@@ -13,7 +13,10 @@ from the front down columns across the chest, from 8 cm under the shoulder joint
 how far it lies behind a line falling in 1 cm for every 2 cm down from any point of it over it).
 Prints JSON: per garment, totals by place, the notches' and the shelves' median and largest.
 
-    python bench/shell_crossings.py [--first 200] [--subjects 30]
+    python bench/shell_crossings.py [--first 200] [--subjects 30] [--cloth skinned|simulated]
+
+``--cloth simulated`` builds the cloth stage's rest shapes (what a simulated top is cut as and
+starts from) in place of the skinned shells.
 """
 from __future__ import annotations
 
@@ -52,10 +55,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--first", type=int, default=200)
     ap.add_argument("--subjects", type=int, default=30)
+    ap.add_argument("--cloth", choices=("skinned", "simulated"), default=None,
+                    help="the subjects' cloth key (default: as sample_subject draws it)")
     a = ap.parse_args()
+    cloth = {"cloth": a.cloth} if a.cloth else {}
     rows, total, notches, shelves = [], {"armpits": 0, "crotch": 0, "elsewhere": 0}, [], []
     for seed in range(a.first, a.first + a.subjects):
-        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64}))
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64} | cloth))
         for g in h.garments:
             if g.params.kind not in loose:
                 continue
@@ -73,7 +79,7 @@ def main() -> None:
             for k in total:
                 total[k] += row[k]
             rows.append(row)
-    print(json.dumps({"subjects": a.subjects, "first": a.first, "garments": len(rows), "crossing_faces": total,
+    print(json.dumps({"subjects": a.subjects, "first": a.first, "cloth": a.cloth, "garments": len(rows), "crossing_faces": total,
                       "middle_notch_mm": {"tops": len(notches), "another_layer_first": notches.count(None),
                                           "median": _median([n for n in notches if n is not None]),
                                           "largest": max((n for n in notches if n is not None), default=None)},
