@@ -410,6 +410,18 @@ def _crossing_beside_the_armpits(h, g, below: float = 0.15) -> int:
                              & (c[:, 1] < r.shoulder[1])).sum())
 
 
+def test_a_simulated_tops_rest_shape_takes_its_share_of_the_room_beside_the_armpits():
+    """The cloth stage's rest shapes scale their offsets beside the armpits by half what a
+    skinned top's do (``ROOM_SIMULATED``; in full, the t-shirt of tests/test_cloth_tops.py folded
+    under its yoke in a walk). Faces crossing the shell beside the armpits, up to 0.3 m under
+    the shoulder joints, of a long sleeve, a shirt, another long sleeve and a sweater built
+    ``cloth: simulated``: 60, 104, 68 and 78 unscaled; now 0."""
+    for seed, kind in ((205, "longsleeve"), (215, "shirt"), (211, "longsleeve"), (226, "sweater")):
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64, "cloth": "simulated"}))
+        g = next(g for g in h.garments if g.params.kind == kind)
+        assert _crossing_beside_the_armpits(h, g, below=0.3) <= 5, (seed, kind, _crossing_beside_the_armpits(h, g, 0.3))
+
+
 def test_a_loose_tops_sleeve_and_side_meet_at_the_armpit_without_crossing():
     """Beside the armpit the arm's underside and the torso's flank face each other a few
     centimetres apart, and a top's shell stood off both by its whole offset: the sleeve's

@@ -56,6 +56,10 @@ FOLD = (0.05, 8, 3.0, 0.04)
 ROOM = (0.016, 1.2, 11, 0.75, 0.5, 0.5)
 ROOM_NONE = 1.0  # metres: the room where there is no limit (finite: it is interpolated)
 ROOM_FREE = 0.15  # metres of room over which no top is scaled (1.5 x the loosest's offset, ~10 cm)
+# the share of that scaling a cloth stage's rest shape takes (a skinned top takes all of it): in full, a
+# t-shirt's back, cut tighter beside the armpits, folded under its yoke in a walk (the arm's swing drew
+# it; bench/RESULTS.md, sessions 105 and 109); at half it folds no more than unscaled there
+ROOM_SIMULATED = 0.5
 # a top under the crotch (``hang_across``): metres over the crotch it starts to hang across both legs;
 # metres over which it comes to (in full from the crotch down); metres between the heights it is
 # measured at (each over twice that up and down); metres off the middle between the legs each half
@@ -414,7 +418,7 @@ class BodyRegions:
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
     room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
     widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
-    hang: bool = False  # skinned tops: scaled to ``room`` and hung across both legs under the crotch (``hang_across``)
+    hang: bool = False  # skinned tops: scaled to ``room`` in full and hung across both legs under the crotch (``hang_across``)
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -528,8 +532,9 @@ def fit_offset(offset: float, room: np.ndarray, widest: float) -> np.ndarray:
 def dress_regions(body, r: BodyRegions, garments, skinned: bool = True) -> BodyRegions:
     """``r`` for an outfit of ``garments``: its loosest top's offset (``outfit_widest``) and,
     with a top worn, the room beside the armpits (``free_room``, over the torso and arms above
-    the waist) that a top's hang moves sideways into at most (``hang_columns``); ``skinned``,
-    tops scale their offsets to it too, and hang across both legs under the crotch
+    the waist) that a top's hang moves sideways into at most (``hang_columns``) and that tops
+    scale their offsets to (``fit_offset``; a cloth stage's rest shapes by ``ROOM_SIMULATED``);
+    ``skinned``, tops scale in full and hang across both legs under the crotch
     (``hang_across``). ``body`` is the body ``r`` was measured on."""
     widest = outfit_widest(r, garments)
     if not widest:
@@ -870,7 +875,7 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
 
 
 def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float, room: np.ndarray | None = None,
-               widest: float = 0.0, scale: bool = True):
+               widest: float = 0.0, scale: float = 1.0):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
     along, the room each has left over its offset where that scales it, ``ROOM_NONE``
@@ -878,9 +883,9 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     region's field dips back over zero past its edge (a tank's arms, cut by its armholes, left
     a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
     arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when
-    given and with ``scale``, scales the offset down where it is tight (``fit_offset``, as the
-    ``widest`` top's, or this one's if it is wider); otherwise the offset is exact (and the room
-    left over it none where it is tighter)."""
+    given, scales the offset down where it is tight (``fit_offset``, as the ``widest`` top's, or
+    this one's if it is wider), by the share ``scale`` of that scaling (none: the offset is exact,
+    and the room left over it none where it is tighter)."""
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
     f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv, limit[src, None])
@@ -888,7 +893,9 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     p, n, uv, limit = p[used], n[used], uv[used], limit[used, 0]
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
     widest = max(widest, offset)
-    off = fit_offset(offset, limit, widest) if room is not None and scale else np.full(len(p), offset)
+    off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
+    if room is not None and scale != 1.0:
+        off = offset + scale * (off - offset)
     tight = limit < 1.5 * widest  # where fit_offset scales it
     return p + n * off[:, None], f, uv, n, np.where(tight, np.maximum(limit - off, 0.0), ROOM_NONE), p
 
@@ -1182,7 +1189,7 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
     v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
                                             r.outward if loose else r.normals, offset, r.room if loose else None,
-                                            r.widest, scale=r.hang)
+                                            r.widest, scale=1.0 if r.hang else ROOM_SIMULATED)
     rep = weld(v)
     v, base = v[rep], base[rep]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:
