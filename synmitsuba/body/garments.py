@@ -56,10 +56,12 @@ FOLD = (0.05, 8, 3.0, 0.04)
 ROOM = (0.016, 1.2, 11, 0.75, 0.5, 0.5)
 ROOM_NONE = 1.0  # metres: the room where there is no limit (finite: it is interpolated)
 ROOM_FREE = 0.15  # metres of room over which no top is scaled (1.5 x the loosest's offset, ~10 cm)
-# the share of that scaling a cloth stage's rest shape takes (a skinned top takes all of it): in full, a
-# t-shirt's back, cut tighter beside the armpits, folded under its yoke in a walk (the arm's swing drew
-# it; bench/RESULTS.md, sessions 105 and 109); at half it folds no more than unscaled there
+# the share of that scaling a cloth stage's rest shape takes over the torso (a skinned top, and the
+# sleeves, take all of it): in full, a t-shirt's back, cut tighter beside the armpits, folded under its
+# yoke in a walk (the arm's swing drew it; bench/RESULTS.md, sessions 105 and 109); at half it folds no
+# more than unscaled there; and the rings of the body mesh next to the arm over which it rises towards the arm's
 ROOM_SIMULATED = 0.5
+ROOM_SHARE_RINGS = 4
 # a top under the crotch (``hang_across``): metres over the crotch it starts to hang across both legs;
 # metres over which it comes to (in full from the crotch down); metres between the heights it is
 # measured at (each over twice that up and down); metres off the middle between the legs each half
@@ -533,7 +535,7 @@ def dress_regions(body, r: BodyRegions, garments, skinned: bool = True) -> BodyR
     """``r`` for an outfit of ``garments``: its loosest top's offset (``outfit_widest``) and,
     with a top worn, the room beside the armpits (``free_room``, over the torso and arms above
     the waist) that a top's hang moves sideways into at most (``hang_columns``) and that tops
-    scale their offsets to (``fit_offset``; a cloth stage's rest shapes by ``ROOM_SIMULATED``);
+    scale their offsets to (``fit_offset``; a cloth stage's rest shapes by ``_room_share``);
     ``skinned``, tops scale in full and hang across both legs under the crotch
     (``hang_across``). ``body`` is the body ``r`` was measured on."""
     widest = outfit_widest(r, garments)
@@ -875,7 +877,7 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
 
 
 def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float, room: np.ndarray | None = None,
-               widest: float = 0.0, scale: float = 1.0):
+               widest: float = 0.0, scale: float | np.ndarray = 1.0):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
     along, the room each has left over its offset where that scales it, ``ROOM_NONE``
@@ -888,14 +890,16 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     and the room left over it none where it is tighter)."""
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
-    f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv, limit[src, None])
+    share = np.broadcast_to(np.asarray(scale, float), (len(body.vertices),))
+    f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv,
+                             np.stack([limit, share], 1)[src])
     used, f = submesh(f, largest_piece(p, f))
-    p, n, uv, limit = p[used], n[used], uv[used], limit[used, 0]
+    p, n, uv, limit, share = p[used], n[used], uv[used], limit[used, 0], limit[used, 1]
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
     widest = max(widest, offset)
     off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
-    if room is not None and scale != 1.0:
-        off = offset + scale * (off - offset)
+    if room is not None and (share != 1.0).any():
+        off = np.where(share == 1.0, off, offset + share * (off - offset))
     tight = limit < 1.5 * widest  # where fit_offset scales it
     return p + n * off[:, None], f, uv, n, np.where(tight, np.maximum(limit - off, 0.0), ROOM_NONE), p
 
@@ -1178,6 +1182,21 @@ def _region(kind: GarmentKind) -> Callable:
     return kind.region
 
 
+def _room_share(body, r: BodyRegions) -> np.ndarray:
+    """Per body vertex, the share of ``fit_offset``'s scaling a cloth stage's rest shape takes
+    (``_cut_shell``): all of it on the arms, so a sleeve's underside comes in off the flank;
+    ``ROOM_SIMULATED`` over the torso (scaled in full, the tighter side was drawn forward by the
+    swinging arm and the back folded under the held yoke in a walk); raised, never lowered,
+    towards the arm's over the ``ROOM_SHARE_RINGS`` rings of the body mesh next to it (stepping
+    there, the shell crossed itself at the armpit's apex; over 2 rings, a sweater's held cloth,
+    set on the body, turned a triangle over beside the armpit in a walk)."""
+    arm = np.where(np.isin(r.group, ["upperarm", "lowerarm", "hand"]), 1.0, ROOM_SIMULATED)
+    mean, share = neighbour_mean(body.faces, len(arm)), arm
+    for _ in range(ROOM_SHARE_RINGS):
+        share = mean @ share
+    return np.maximum(arm, share)
+
+
 def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentParams, offset: float,
                  across: bool = True):
     """The body region ``cut`` covers, offset from the body; tops and dresses along
@@ -1189,7 +1208,7 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
     v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
                                             r.outward if loose else r.normals, offset, r.room if loose else None,
-                                            r.widest, scale=1.0 if r.hang else ROOM_SIMULATED)
+                                            r.widest, scale=1.0 if r.hang else _room_share(body, r))
     rep = weld(v)
     v, base = v[rep], base[rep]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:
