@@ -891,14 +891,14 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
     share = np.broadcast_to(np.asarray(scale, float), (len(body.vertices),))
-    f, p, n, uv, limit = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv,
-                             np.stack([limit, share], 1)[src])
+    f, p, n, uv, limit, share = cut(split.faces, phi[src], body.vertices[src], normals[src], split.uv,
+                                    limit[src, None], share[src, None])
     used, f = submesh(f, largest_piece(p, f))
-    p, n, uv, limit, share = p[used], n[used], uv[used], limit[used, 0], limit[used, 1]
+    p, n, uv, limit, share = p[used], n[used], uv[used], limit[used, 0], share[used, 0]
     n = n / np.linalg.norm(n, axis=1, keepdims=True)
     widest = max(widest, offset)
     off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
-    if room is not None and (share != 1.0).any():
+    if room is not None:  # a full share keeps fit_offset's arrays exactly
         off = np.where(share == 1.0, off, offset + share * (off - offset))
     tight = limit < 1.5 * widest  # where fit_offset scales it
     return p + n * off[:, None], f, uv, n, np.where(tight, np.maximum(limit - off, 0.0), ROOM_NONE), p
@@ -1208,7 +1208,8 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
     v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
                                             r.outward if loose else r.normals, offset, r.room if loose else None,
-                                            r.widest, scale=1.0 if r.hang else _room_share(body, r))
+                                            r.widest, scale=_room_share(body, r) if loose and not r.hang and r.room is not None
+                                            else 1.0)
     rep = weld(v)
     v, base = v[rep], base[rep]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:
