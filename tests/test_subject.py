@@ -458,6 +458,33 @@ def test_a_long_top_hangs_straight_across_both_legs_under_the_crotch():
         assert notch < 0.015, (seed, kind, notch)
 
 
+def test_a_simulated_long_top_is_one_tube_round_both_legs_under_the_crotch():
+    """The cloth stage's rest shape of a top long enough to pass the crotch was two tubes, one
+    round each thigh, whose inner sides went through each other between the legs (in a walk,
+    a pair of shorts under the hem). It now hangs across both legs too (``hang_across``), and
+    the two halves are sewn into one tube at the front and back (``close_middle``): hung across
+    but not sewn, each thigh's inner side lay on the middle, a wall from front to back, and the
+    cloth stage simulated culottes (seed 213's long sleeve tore by a walk's third frame). Under
+    the crotch, its openings (merged by position) are one, round both legs, and faces crossing
+    another of the shell there (``reference.self_crossing``) were 146, 135, 144 and 156 as two
+    tubes, 68, 65, 57 and 84 hung across with the wall; now 6, 19, 6 and 23."""
+    from reference import self_crossing
+    for seed, kind in ((213, "longsleeve"), (205, "longsleeve"), (217, "shirt"), (222, "blazer")):
+        h = sm.build_subject(sm.sample_subject(np.random.default_rng(seed), {"texture_size": 64, "cloth": "simulated"}))
+        g = next(g for g in h.garments if g.params.kind == kind)
+        mesh = trimesh.Trimesh(g.vertices, g.faces[:len(g.faces) - g.hem[0]], process=True)
+        open_ = mesh.edges_sorted[trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1)]
+        crotch, middle = h.regions.crotch_y, float(h.body.vertices[h.body.vertices[:, 1] < h.regions.crotch_y - 0.05, 0].mean())
+        low = [np.unique(open_[np.isin(open_, c).all(1)]) for c in trimesh.graph.connected_components(open_)]
+        low = [p for p in low if (mesh.vertices[p, 1] < crotch - 0.02).any()]
+        assert len(low) == 1, (seed, kind, len(low))
+        x = mesh.vertices[low[0], 0] - middle
+        assert x.min() < -0.1 and x.max() > 0.1, (seed, kind)  # round both legs
+        under = mesh.triangles_center[:, 1] < crotch + 0.04
+        crossing = int(self_crossing(mesh.vertices, mesh.faces, under).sum())
+        assert crossing <= 35, (seed, kind, crossing)
+
+
 def test_a_loose_tops_neckline_is_smooth_and_turned_in_evenly():
     """Loose tops stand 3-5 cm off the body, and a neckline cut over the body's 1-1.5 cm
     triangles and offset that far zigzagged by 2-3 mm, with a notch at the centre front; its

@@ -420,7 +420,8 @@ class BodyRegions:
     girths: Girths | None = None   # tape-measure chest and hips (body/sizing.py): what graded garments fit
     room: np.ndarray | None = None  # (V,) metres a top may stand off each vertex along ``outward`` (``free_room``)
     widest: float = 0.0  # metres: the loosest top's offset of the outfit worn (``outfit_widest``), which tops scale by
-    hang: bool = False  # skinned tops: scaled to ``room`` in full and hung across both legs under the crotch (``hang_across``)
+    hang: bool = False  # skinned tops: scaled to ``room`` in full
+    across: bool = False  # a long top hangs across both legs under the crotch (``hang_across``)
 
 
 def offset_directions(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, low: float, high: float,
@@ -536,14 +537,15 @@ def dress_regions(body, r: BodyRegions, garments, skinned: bool = True) -> BodyR
     with a top worn, the room beside the armpits (``free_room``, over the torso and arms above
     the waist) that a top's hang moves sideways into at most (``hang_columns``) and that tops
     scale their offsets to (``fit_offset``; a cloth stage's rest shapes by ``_room_share``);
-    ``skinned``, tops scale in full and hang across both legs under the crotch
-    (``hang_across``). ``body`` is the body ``r`` was measured on."""
+    ``skinned``, tops scale in full. Long tops hang across both legs under the crotch
+    (``hang_across``; the cloth stage's sewn into one tube, ``close_middle``). ``body`` is the
+    body ``r`` was measured on."""
     widest = outfit_widest(r, garments)
     if not widest:
         return dataclasses.replace(r, widest=widest)
     v = body.vertices
     probed = np.isin(r.group, ["torso", "upperarm", "lowerarm"]) & (v[:, 1] > r.waist_y)
-    return dataclasses.replace(r, widest=widest, hang=skinned, room=free_room(body, r.outward, probed,
+    return dataclasses.replace(r, widest=widest, hang=skinned, across=True, room=free_room(body, r.outward, probed,
                                                                    np.isin(r.group, ["upperarm", "lowerarm", "hand"])))
 
 
@@ -1025,7 +1027,8 @@ def _at_angles(values: np.ndarray, ang: np.ndarray, a: np.ndarray) -> np.ndarray
     return (1 - t) * values[rows, j] + t * values[rows, j + 1]
 
 
-def hang_across(body, r: BodyRegions, v: np.ndarray, f: np.ndarray, base: np.ndarray, slope: float) -> np.ndarray:
+def hang_across(body, r: BodyRegions, v: np.ndarray, f: np.ndarray, base: np.ndarray,
+                slope: float) -> tuple[np.ndarray, np.ndarray]:
     """A loose top under the crotch as cloth hangs there: across both legs, not round each
     thigh. Cut from the thighs, its shell was two tubes whose inner sides, offset towards each
     other, went through one another between the legs (seeds 200-229: 809 crossing faces) and
@@ -1036,11 +1039,12 @@ def hang_across(body, r: BodyRegions, v: np.ndarray, f: np.ndarray, base: np.nda
     ``ACROSS[0]`` over the crotch to the crotch (``_onto_hull``); a point going out towards the
     middle between the legs stops on it: straight across the front and back, the thighs' inner
     sides laid on the middle where the two halves meet (``_into_corners``). Each point's move
-    depends on its own position alone (seam copies move as one); the sleeves are left out."""
+    depends on its own position alone (seam copies move as one); the sleeves are left out.
+    Returns the points and which of them were laid on the middle (the wall ``close_middle`` takes out)."""
     top = r.crotch_y + ACROSS[0]
     rows = np.flatnonzero((v[:, 1] < top) & np.isin(r.group[body.surface().tree.query(base)[1]], ["torso", "upperleg"]))
     if len(rows) < 3:
-        return v
+        return v, np.zeros(len(v), bool)
     middle, out = _legs_middle(body, r), v.copy()
     wall, corners = np.zeros(len(v), bool), np.zeros((len(v), 2))
     y = top - ACROSS[2] * np.arange(int(np.ceil((top - v[rows, 1].min()) / ACROSS[2])) + 1)  # going down
@@ -1055,7 +1059,7 @@ def hang_across(body, r: BodyRegions, v: np.ndarray, f: np.ndarray, base: np.nda
         heights, centre, reach, ang = table
         out[i[:, None], [0, 2]], wall[i], corners[i] = _onto_hull(v[i], heights, centre, reach, ang, top,
                                                                    middle + side * ACROSS[3], side)
-    return _into_corners(out, f, wall, corners)
+    return _into_corners(out, f, wall, corners), wall
 
 
 def _into_corners(v: np.ndarray, f: np.ndarray, wall: np.ndarray, corners: np.ndarray) -> np.ndarray:
@@ -1079,6 +1083,137 @@ def _into_corners(v: np.ndarray, f: np.ndarray, wall: np.ndarray, corners: np.nd
     moved = np.isfinite(level)
     out[moved, 2] = level[moved] + ACROSS[5] * (v[moved, 2] - level[moved])
     return out[rep]
+
+
+def close_middle(v: np.ndarray, f: np.ndarray, uv: np.ndarray, wall: np.ndarray):
+    """A top hung across both legs (``hang_across``) made one tube round them under the crotch:
+    the ``wall`` (each thigh's inner side, laid on the middle between the legs) taken out, and the
+    two halves' edges left on the middle at the front and at the back sewn to each other
+    (``_sew``). With the wall, the cloth stage simulated a pair of culottes: the middle between
+    the legs pulled the front and back together in a stride and tore the cloth (seed 213's long
+    sleeve over simulated shorts: an edge 0.2 m past its rest length by the walk's third frame).
+    Unchanged where the edges on the middle are not two halves meeting at one point."""
+    rep = weld(v)
+    w = np.zeros(len(v), bool)
+    w[rep[wall]] = True
+    wall = w[rep]
+    keep = ~wall[f].all(1)
+    if keep.all():
+        return v, f, uv
+    f = f[keep]
+    edges = open_edges(f, rep)
+    edges = edges[wall[edges].all(1)]
+    v, uv, f = v.copy(), uv.copy(), f.copy()
+    for chain_a, chain_b in _middle_chains(v, f, rep, edges):
+        v, f, uv = _sew(v, f, uv, rep, chain_a, chain_b)
+        rep = np.concatenate([rep, len(rep) + np.arange(len(v) - len(rep))])
+    used = np.unique(f)
+    new = np.full(len(v), -1)
+    new[used] = np.arange(len(used))
+    return v[used], new[f], uv[used]
+
+
+def _middle_chains(v: np.ndarray, f: np.ndarray, rep: np.ndarray, edges: np.ndarray) -> list:
+    """Per path of ``edges`` (open, on the middle) whose faces lie on one side of it up to a
+    point and on the other beyond it (a slit reaching the hem), or per loop of them whose faces
+    lie on one side and then the other (a slit over the hem): two chains of its edges from one
+    such point out, one a side (``_sew``)."""
+    side = {}
+    for a, b in edges:
+        c = np.flatnonzero(((f == a) | (f == b)).sum(1) == 2)
+        side[(rep[a], rep[b])] = (a, b, float(v[f[c[0]]].mean(0)[0]))  # the x of the face it bounds
+    nxt = {ra: rb for ra, rb in side}
+    ends = set(nxt) - set(nxt.values())
+    out, seen = [], set()
+    for start in sorted(ends) + sorted(nxt):
+        if start in seen:
+            continue
+        path, x = [], start
+        while x in nxt and x not in seen:
+            seen.add(x)
+            path.append(side[(x, nxt[x])])
+            x = nxt[x]
+        middle = float(np.median([v[p[0], 0] for p in path]))
+        left = np.array([p[2] for p in path]) < middle
+        pairs = [(a, b) for a, b, _ in path]
+        if x != start:  # from the hem up to the point and down again
+            turns = np.flatnonzero(left[1:] != left[:-1]) + 1
+            if len(turns) == 1:
+                k = turns[0]
+                out.append(([(b, a) for a, b in pairs[:k]][::-1], pairs[k:]))
+            continue
+        turns = np.flatnonzero(left != np.roll(left, 1))  # round (and back to the start)
+        if len(turns) == 2:  # from one turn to the other, either way
+            pairs = pairs[turns[0]:] + pairs[:turns[0]]
+            k = turns[1] - turns[0]
+            out.append((pairs[:k], [(b, a) for a, b in pairs[k:]][::-1]))
+    return out
+
+
+def _sew(v: np.ndarray, f: np.ndarray, uv: np.ndarray, rep: np.ndarray, chain_a: list, chain_b: list):
+    """Two chains of edges from one point out, sewn to each other: points at the same share of
+    each chain's length (within ``SEW_TOLERANCE`` metres) made one at their mean, and a point of
+    one without a partner put into the other's edge there (``_split_edges``), so every point of
+    either lies on both; the cloth stage welds them (``_particles``)."""
+    pa, pb = ([c[0][0]] + [e[1] for e in c] for c in (chain_a, chain_b))
+    sa, sb = (np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(v[p], axis=0), axis=1))]) for p in (pa, pb))
+    if min(sa[-1], sb[-1]) < 1e-6:
+        return v, f, uv
+    ta, tb, length = sa / sa[-1], sb / sb[-1], 0.5 * (sa[-1] + sb[-1])
+    t, on_a, on_b, i, j = [], [], [], 0, 0  # merged points: share, index on a or -1, on b or -1
+    while i < len(ta) or j < len(tb):
+        both = i < len(ta) and j < len(tb) and abs(ta[i] - tb[j]) * length < SEW_TOLERANCE
+        take_a = both or j >= len(tb) or (i < len(ta) and ta[i] < tb[j])
+        take_b = both or not take_a
+        t.append(0.5 * (ta[i] + tb[j]) if both else ta[i] if take_a else tb[j])
+        on_a.append(i if take_a else -1)
+        on_b.append(j if take_b else -1)
+        i, j = i + take_a, j + take_b
+    share = np.array(t)
+
+    def along(s: np.ndarray, p: list) -> np.ndarray:  # the points at those shares of a chain's length
+        return np.stack([np.interp(share * s[-1], s, v[p][:, k]) for k in range(3)], -1)
+    pos = 0.5 * (along(sa, pa) + along(sb, pb))
+    v = v.copy()
+    for pts, on in ((pa, on_a), (pb, on_b)):
+        for k, x in zip(on, pos):
+            if k >= 0:
+                v[rep == rep[pts[k]]] = x
+    for pts, on in ((pa, on_a), (pb, on_b)):
+        v, f, uv = _split_edges(v, f, uv, pts, np.array(on), pos)
+    return v, f, uv
+
+
+def _split_edges(v: np.ndarray, f: np.ndarray, uv: np.ndarray, pts: list, on: np.ndarray, pos: np.ndarray):
+    """The face on each edge of a chain (points ``pts``) split in a fan at the merged points
+    (``pos``) between its ends that the chain has no point of its own at (``on`` -1), their uv
+    along the edge."""
+    own = np.flatnonzero(on >= 0)
+    new_v, new_uv, new_f, drop = [v], [uv], [], []
+    n = len(v)
+    for k0, k1 in zip(own[:-1], own[1:]):
+        if k1 == k0 + 1:
+            continue
+        a, b = pts[on[k0]], pts[on[k1]]
+        row = int(np.flatnonzero(((f == a) | (f == b)).sum(1) == 2)[0])
+        corners = list(f[row])
+        c = next(x for x in corners if x not in (a, b))
+        forward = corners[(corners.index(a) + 1) % 3] == b  # the face winds a -> b -> c
+        extra = pos[k0 + 1:k1]
+        s = np.clip(np.linalg.norm(extra - v[a], axis=1) / max(float(np.linalg.norm(v[b] - v[a])), 1e-12), 0.0, 1.0)
+        new_v.append(extra)
+        new_uv.append((1 - s)[:, None] * uv[a] + s[:, None] * uv[b])
+        ring = [a, *range(n, n + len(extra)), b]
+        n += len(extra)
+        new_f += [[p, q, c] if forward else [q, p, c] for p, q in zip(ring[:-1], ring[1:])]
+        drop.append(row)
+    keep = np.ones(len(f), bool)
+    keep[drop] = False
+    f = np.concatenate([f[keep]] + ([np.array(new_f, dtype=f.dtype)] if new_f else []))
+    return np.concatenate(new_v), f, np.concatenate(new_uv)
+
+
+SEW_TOLERANCE = 0.003  # metres: points of the two chains this near in arc length are made one
 
 
 def _across_table(y: np.ndarray, windows: list, hulls: list, base: np.ndarray, mine: np.ndarray, line: float,
@@ -1203,7 +1338,8 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     ``r.outward`` (``offset_directions``: bottoms keep the skin's normals, whose legs' shells
     parted higher at the crotch along the averaged ones), bridged over the hollows of the small
     of the back and the belly, and draped; a top's (``across``; not a dress's or a coat's
-    bodice, whose skirt is its own) hangs across both legs under the crotch (``hang_across``)."""
+    bodice, whose skirt is its own) hangs across both legs under the crotch (``hang_across``), and
+    the cloth stage's (``r.hang`` false) is one tube round them there (``close_middle``)."""
     kind = GARMENTS[g.kind]
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
     v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
@@ -1219,8 +1355,10 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
         v = bridge(v, f, out, low_back, offset)
         v = hang_columns(v, f, torso, slope, spare=ROOM[5] * spare)
         v = smooth_openings(v, f)
-        if across and r.hang and kind.layer == Layer.TOP:  # a top's: a coat's skirt, a jumpsuit's legs are their own
-            v = hang_across(body, r, v, f, base, slope)
+        if across and r.across and kind.layer == Layer.TOP:  # a top's: a coat's skirt, a jumpsuit's legs are their own
+            v, wall = hang_across(body, r, v, f, base, slope)
+            if not r.hang:  # the cloth stage's: one tube round both legs, not culottes
+                v, f, uv = close_middle(v, f, uv, wall)
     return v, f, uv
 
 
@@ -1424,7 +1562,7 @@ def across_weights(body, r: BodyRegions, v: np.ndarray, weights: np.ndarray) -> 
     from over the crotch down (``both_legs_weights``), not the sleeves; else the bound ones.
     Bound to its closest point, each half followed one thigh and a stride opened the two halves
     where they meet in the middle."""
-    if not r.hang:
+    if not r.across:
         return weights
     near = r.group[body.surface().tree.query(v)[1]]
     return both_legs_weights(body, r, v, weights, top=r.crotch_y + ACROSS[0], among=np.isin(near, ["torso", "upperleg"]),
@@ -1469,7 +1607,7 @@ def build_garment(body, r: BodyRegions, split, g: GarmentParams, below: float = 
         v = _let_out_legs(body, r, v, room)
     n_faces, n_vertices = len(f), len(v)
     if GARMENT_SHAPES[kind.shape].hemmed:
-        across = r.hang and kind.layer == Layer.TOP and maker.across
+        across = r.across and kind.layer == Layer.TOP and maker.across
         v, f, uv = hem(body, v, f, uv, g.thickness, along_normal=bool(g.cut and SKIRT_CUTS[g.cut].folds),
                        legs=(_legs_centre(body, r), r.crotch_y + ACROSS[0]) if across else None)
     v = push_out(body, v)

@@ -111,10 +111,11 @@ class LayeredHuman:
         body.skeleton = type(body.skeleton)(body.skeleton.names, body.skeleton.parents,
                                             body.skeleton.rest_positions + [0, lift, 0])
         # on the lifted body: hems at heights over its soles. Tops over each other scale alike where the arm is
-        # near (``free_room``), by the loosest's offset, and a long top hangs across both legs (``hang_across``);
-        # not the cloth stage's rest shapes yet: scaled, a simulated t-shirt's back turned down under its held
-        # yoke (2-4 faces a frame from frame 3 of tests/test_cloth_tops.py's walk, none before). They hang no
-        # further sideways than the room: unbounded, the bust's side went out into the sleeve (``hang_columns``)
+        # near (``free_room``), by the loosest's offset (the cloth stage's rest shapes by their share, ``_room_share``:
+        # scaled in full, a simulated t-shirt's back turned down under its held yoke, 2-4 faces a frame from frame 3
+        # of tests/test_cloth_tops.py's walk), and a long top hangs across both legs (``hang_across``; the cloth
+        # stage's sewn into one tube, ``close_middle``). They hang no further sideways than the room: unbounded,
+        # the bust's side went out into the sleeve (``hang_columns``)
         self.regions: BodyRegions = dress_regions(body, body_regions(body), recipe.garments,
                                                   skinned=recipe.cloth != "simulated")
         # the face shape after the regions (clothes are cut for the body's phenotypes; the neck's measuring
