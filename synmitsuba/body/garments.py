@@ -1105,7 +1105,6 @@ def close_middle(v: np.ndarray, f: np.ndarray, uv: np.ndarray, wall: np.ndarray)
     f = f[keep]
     edges = open_edges(f, rep)
     edges = edges[wall[edges].all(1)]
-    v, uv, f = v.copy(), uv.copy(), f.copy()
     for chain_a, chain_b in _middle_chains(v, f, rep, edges):
         v, f, uv = _sew(v, f, uv, rep, chain_a, chain_b)
         rep = np.concatenate([rep, len(rep) + np.arange(len(v) - len(rep))])
