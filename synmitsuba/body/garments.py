@@ -62,6 +62,12 @@ ROOM_FREE = 0.15  # metres of room over which no top is scaled (1.5 x the looses
 # more than unscaled there; and the rings of the body mesh next to the arm over which it rises towards the arm's
 ROOM_SIMULATED = 0.5
 ROOM_SHARE_RINGS = 4
+# and a kind worn over a top (its order ROOM_CAP_ORDER or more: jackets, blazers, coats) never further off
+# than ROOM_CAP times the room there: at half, a jacket's flank (6-7 cm off) stood past the middle of the
+# gap to the arm, through its own sleeve's underside (hundreds of faces); capped so, a t-shirt (3.5 cm off,
+# no faces through) moved 5 mm and folded more under its yoke in a walk (bench/RESULTS.md, session 112)
+ROOM_CAP = 1.2
+ROOM_CAP_ORDER = 4
 # a top under the crotch (``hang_across``): metres over the crotch it starts to hang across both legs;
 # metres over which it comes to (in full from the crotch down); metres between the heights it is
 # measured at (each over twice that up and down); metres off the middle between the legs each half
@@ -879,7 +885,7 @@ def push_out(body, points: np.ndarray, clearance: float = CLEARANCE, rounds: int
 
 
 def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float, room: np.ndarray | None = None,
-               widest: float = 0.0, scale: float | np.ndarray = 1.0):
+               widest: float = 0.0, scale: float | np.ndarray = 1.0, cap: float = np.inf):
     """The body's render mesh cut along ``phi == 0`` (``topology.cut``), offset along
     ``normals`` (per body vertex): (vertices, faces, uv, the unit directions it stood off
     along, the room each has left over its offset where that scales it, ``ROOM_NONE``
@@ -888,8 +894,9 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     a patch of 13-29 points under each armpit on 5 of 16 subjects) the patch would ride on the
     arm skinned, and fall away simulated. ``room`` (per body vertex, ``free_room``), when
     given, scales the offset down where it is tight (``fit_offset``, as the ``widest`` top's, or
-    this one's if it is wider), by the share ``scale`` of that scaling (none: the offset is exact,
-    and the room left over it none where it is tighter)."""
+    this one's if it is wider), by the share ``scale`` of that scaling, where that is under 1 never
+    to more than ``cap`` times the room (none: the offset is exact, and the room left over it none
+    where it is tighter)."""
     src = split.source
     limit = np.full(len(body.vertices), ROOM_NONE) if room is None else np.minimum(room, ROOM_NONE)
     share = np.broadcast_to(np.asarray(scale, float), (len(body.vertices),))
@@ -901,7 +908,8 @@ def _cut_shell(body, split, phi: np.ndarray, normals: np.ndarray, offset: float,
     widest = max(widest, offset)
     off = np.full(len(p), offset) if room is None else fit_offset(offset, limit, widest)
     if room is not None:  # a full share keeps fit_offset's arrays exactly
-        off = np.where(share == 1.0, off, offset + share * (off - offset))
+        shared = offset + share * (off - offset)
+        off = np.where(share == 1.0, off, np.minimum(shared, cap * limit) if np.isfinite(cap) else shared)
     tight = limit < 1.5 * widest  # where fit_offset scales it
     return p + n * off[:, None], f, uv, n, np.where(tight, np.maximum(limit - off, 0.0), ROOM_NONE), p
 
@@ -1343,10 +1351,11 @@ def _shell_shape(body, r: BodyRegions, split, g: GarmentParams, cut: GarmentPara
     the cloth stage's (``r.hang`` false) is one tube round them there (``close_middle``)."""
     kind = GARMENTS[g.kind]
     loose = kind.layer in (Layer.TOP, Layer.DRESS)
+    shared = loose and not r.hang and r.room is not None  # a cloth stage's rest shape: ``_room_share``
     v, f, uv, out, spare, base = _cut_shell(body, split, _region(kind)(cut, r, body.vertices),
                                             r.outward if loose else r.normals, offset, r.room if loose else None,
-                                            r.widest, scale=_room_share(body, r) if loose and not r.hang and r.room is not None
-                                            else 1.0)
+                                            r.widest, scale=_room_share(body, r) if shared else 1.0,
+                                            cap=ROOM_CAP if kind.order >= ROOM_CAP_ORDER else np.inf)
     rep = weld(v)
     v, base = v[rep], base[rep]  # a seam's two copies of a cut vertex, ~1e-7 m apart, made one point: no crack opens later
     if loose:
