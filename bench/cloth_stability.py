@@ -61,8 +61,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 # all four count from 2d29e54. cfa3288 scaled bodices' and tucked tops' rest shapes by half a skinned top's
 # scaling beside the armpits: all four count from it. de5a807 gave the sleeves all of it and the torso half,
 # raised towards the arm's over 4 rings: all four count from it. 5ba0b02 hung long tops (a jacket over a dress
-# among them) across both legs, sewn into one tube: all four count from it.
-SAME_CLOTH_SINCE = {"skirt": "5ba0b02", "dress": "5ba0b02", "shift": "5ba0b02", "wrap": "5ba0b02"}
+# among them) across both legs, sewn into one tube: all four count from it. 771f82c kept a jacket's, blazer's or
+# coat's flank within 1.2 times the room beside the armpit (a jacket over a skirt among them): all four count from it.
+SAME_CLOTH_SINCE = {"skirt": "771f82c", "dress": "771f82c", "shift": "771f82c", "wrap": "771f82c"}
 # Tops (t-shirts, tanks, long sleeves, shirts, sweaters, hoodies worn with nothing over them) are simulated as today from
 # 6271691, jackets and blazers over trousers or shorts from f177db3 (54b59dd made them clips of the set, so
 # clips drawn before it may be other clips), and over simulated trousers and shorts, which the set counts too, from
@@ -78,8 +79,9 @@ SAME_CLOTH_SINCE = {"skirt": "5ba0b02", "dress": "5ba0b02", "shift": "5ba0b02", 
 # jumpsuits in the set); 6e3b41b and 2d29e54: tops' rest shapes hung straight down from the bust, down columns, not
 # edges, and sideways into the room beside the armpits at most; cfa3288: scaled by half a skinned top's beside them;
 # de5a807: by all of it on the sleeves, half over the torso, raised towards the sleeve's over 4 rings; 5ba0b02:
-# long tops hung across both legs under the crotch, their halves sewn into one tube (``close_middle``).
-TOPS_SINCE = "5ba0b02"
+# long tops hung across both legs under the crotch, their halves sewn into one tube (``close_middle``); 771f82c:
+# jackets', blazers' and coats' flanks within 1.2 times the room beside the armpits.
+TOPS_SINCE = "771f82c"
 FAR = 0.5  # metres from the skinned garment (or in one frame) worth a look; ClothSettings.max_drift (1 m) raises
 
 
