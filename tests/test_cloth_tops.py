@@ -62,7 +62,7 @@ def _part(human, name: str) -> int:
     return next(k for k, p in enumerate(human.parts) if p.name == name)
 
 
-@pytest.mark.timeout(600)  # the first to run sets up ``tee_walk``
+@pytest.mark.timeout(900)  # the first to run sets up ``tee_walk`` (~9-10 min of simulation beside the other worker)
 def test_a_tops_collider_is_the_body_the_trousers_and_a_web_between_the_thighs_eachclosed_shell(tee_walk):
     human, clip, track = tee_walk
     _, collider = cloth_inputs(human, clip, TEE_SETTINGS, ["tshirt"], {"trousers": track.frames["trousers"]})
@@ -86,7 +86,7 @@ def test_a_tops_collider_is_the_body_the_trousers_and_a_web_between_the_thighs_e
     assert (np.abs(web[:, 0] - hips[:, 0].mean()) < np.abs(hips[0, 0] - hips[1, 0]) / 2).all()
 
 
-@pytest.mark.timeout(600)  # the first to run sets up ``tee_walk``
+@pytest.mark.timeout(900)  # the first to run sets up ``tee_walk`` (~9-10 min of simulation beside the other worker)
 def test_a_simulated_tshirt_hangs_over_the_simulated_trousers_outside_them_and_the_body(tee_walk):
     """Issue 34's garment-against-garment goal: no vertex of the outer layer inside the inner
     one by more than 3 mm (the stage keeps it 2 mm out of the trousers as simulated, closed)."""
@@ -122,7 +122,7 @@ def test_a_simulated_tshirt_hangs_over_the_simulated_trousers_outside_them_and_t
     assert 0.02 < lag < 0.2  # it hangs and lags, and no hem flies off
 
 
-@pytest.mark.timeout(600)  # the first to run sets up ``tee_walk``
+@pytest.mark.timeout(900)  # the first to run sets up ``tee_walk`` (~9-10 min of simulation beside the other worker)
 def test_a_simulated_tops_yoke_leaves_no_shelf_across_the_chest_and_back(tee_walk):
     """Under the held line (from 3 to 10 cm under the shoulder joints, the torso between the
     arms), no triangle of the t-shirt faces down (its normal's y under -0.6) where the skinned
@@ -346,7 +346,7 @@ def test_trousers_hang_from_the_seat_and_under_a_skinned_top_from_its_end():
         assert 0.2 < (~g.piece.held).mean() < 0.9
 
 
-@pytest.mark.timeout(600)  # the first to run sets up ``tee_walk``
+@pytest.mark.timeout(900)  # the first to run sets up ``tee_walk`` (~9-10 min of simulation beside the other worker)
 def test_simulated_trousers_stay_out_of_the_body_with_their_seat_held(tee_walk):
     """The trousers under the t-shirt, simulated first: outside the closed body (winding numbers)
     but where the thighs press into each other at the crotch, their held seat on the skinned
